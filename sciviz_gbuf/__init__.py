@@ -1,0 +1,25 @@
+"""sciviz_gbuf: comprehensible rendering of 3-D shapes with G-buffers for PyVista/VTK.
+
+Capture float32 G-buffers of a PyVista scene once (:func:`capture`), then run any number of
+image-space enhancements on them (:mod:`sciviz_gbuf.filters`), following Saito & Takahashi
+(SIGGRAPH 1990) and Nienhaus & Döllner (WSCG 2003).
+"""
+
+from __future__ import annotations
+
+from .camera import CameraInfo
+from .capture import capture
+from .errors import InputError, RenderError, SciVizGBufError
+from .gbuffer import GBuffer
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "CameraInfo",
+    "GBuffer",
+    "InputError",
+    "RenderError",
+    "SciVizGBufError",
+    "__version__",
+    "capture",
+]

@@ -1,0 +1,318 @@
+"""``capture``: one VTK offscreen render of a scene -> float32 G-buffers.
+
+How (a visibility buffer, Burns & Hunt 2013): VTK rasterises the scene once, every triangle
+flat-coloured with its own index (:mod:`sciviz_gbuf._render`). For each covered pixel the ray
+through the pixel centre is then intersected in float64 with that triangle
+(:mod:`sciviz_gbuf._kernels`), which yields world coordinates, linear depth, Saito's ``sz``
+(1990 Eq. 6), interpolated normals, texture coordinates and scalars, all exact to float32,
+from a single render however many channels are asked for.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from vtkmodules.vtkRenderingCore import vtkCamera
+
+from . import _kernels
+from ._progress import progress
+from ._render import IdRenderer
+from .camera import VIEWS, CameraInfo
+from .errors import InputError
+from .gbuffer import GBuffer
+from .scene import Surface, _is_plotter, collect_surfaces
+
+__all__ = ["DEFAULT_WINDOW_SIZE", "MAX_BUFFER_SIZE", "capture"]
+
+DEFAULT_WINDOW_SIZE = (1024, 768)
+#: Largest buffer edge in pixels (window size times supersample); OpenGL's usual limit.
+MAX_BUFFER_SIZE = 16384
+# Margin of the tight clipping range, relative to the depth extent of the data.
+_CLIP_MARGIN = 1e-3
+
+
+def _check_window_size(window_size: object) -> tuple[int, int]:
+    try:
+        w, h = window_size  # type: ignore[misc]
+        ok = all(float(v) == int(v) for v in (w, h))
+    except (TypeError, ValueError):
+        ok = False
+    if not ok or int(w) <= 0 or int(h) <= 0:
+        raise InputError(
+            f"window_size: expected two positive integers (width, height), got {window_size!r}"
+        )
+    return int(w), int(h)
+
+
+def _check_scalars(scalars: object) -> tuple[str, ...]:
+    if isinstance(scalars, str):
+        return (scalars,)
+    try:
+        names = tuple(scalars)  # type: ignore[arg-type]
+    except TypeError:
+        raise InputError(f"scalars: expected array names, got {scalars!r}") from None
+    for n in names:
+        if not isinstance(n, str) or not n:
+            raise InputError(f"scalars: expected non-empty array names, got {n!r}")
+    return names
+
+
+def _resolve_camera(camera: object, scene: object, parallel: bool | None) -> tuple[vtkCamera, bool]:
+    """A new camera for the capture, and whether it still has to be fitted to the data."""
+    cam = vtkCamera()
+    reset = False
+    if camera is None and _is_plotter(scene):
+        cam.DeepCopy(scene.renderer.GetActiveCamera())
+        # A Plotter that was never shown has not placed its camera yet: place it as it will.
+        camera = None if not scene.renderer.camera_set else cam
+        if camera is None:
+            camera = "iso"
+    if camera is None:
+        camera = "iso"
+    if isinstance(camera, str):
+        if camera not in VIEWS:
+            raise InputError(f"camera: unknown view {camera!r}; expected one of {sorted(VIEWS)}")
+        direction, up = VIEWS[camera]
+        cam.SetFocalPoint(0.0, 0.0, 0.0)
+        cam.SetPosition(*direction)
+        cam.SetViewUp(*up)
+        reset = True
+    elif isinstance(camera, CameraInfo):
+        cam = camera.to_vtk()
+    elif isinstance(camera, vtkCamera):
+        if camera is not cam:
+            cam.DeepCopy(camera)
+    else:
+        try:
+            pos, foc, up = (np.asarray(v, dtype=np.float64).reshape(3) for v in camera)  # type: ignore[union-attr]
+        except (TypeError, ValueError):
+            raise InputError(
+                "camera: expected None, a view name, a vtkCamera/pyvista.Camera, a CameraInfo "
+                f"or (position, focal_point, view_up), got {camera!r}"
+            ) from None
+        if not (np.isfinite(pos).all() and np.isfinite(foc).all() and np.isfinite(up).all()):
+            raise InputError("camera: position, focal point and view up must be finite")
+        if np.allclose(pos, foc):
+            raise InputError("camera: position and focal point coincide")
+        cam.SetPosition(*pos)
+        cam.SetFocalPoint(*foc)
+        cam.SetViewUp(*up)
+    if parallel is not None:
+        if parallel and not cam.GetParallelProjection():
+            # switching to orthographic keeps the focal plane's extent
+            cam.SetParallelScale(cam.GetDistance() * np.tan(np.radians(cam.GetViewAngle()) / 2))
+        cam.SetParallelProjection(bool(parallel))
+    dop = np.subtract(cam.GetFocalPoint(), cam.GetPosition())
+    if np.linalg.norm(np.cross(dop, cam.GetViewUp())) == 0.0:
+        raise InputError("camera: view up is parallel to the viewing direction")
+    return cam, reset
+
+
+def _merge(surfaces: list[Surface]) -> tuple[np.ndarray, ...]:
+    n_pts = np.cumsum([0] + [s.points.shape[0] for s in surfaces])
+    points = np.concatenate([s.points for s in surfaces])
+    normals = np.concatenate([s.normals for s in surfaces])
+    triangles = np.concatenate([s.triangles + n_pts[i] for i, s in enumerate(surfaces)])
+    tri_obj = np.concatenate(
+        [np.full(s.triangles.shape[0], i, dtype=np.int32) for i, s in enumerate(surfaces)]
+    )
+    tri_cell = np.concatenate([s.cell_ids for s in surfaces])
+    return points, normals, triangles, tri_obj, tri_cell, n_pts
+
+
+def _fit_clipping(cam: vtkCamera, points: np.ndarray) -> None:
+    """Near/far planes tight around the data (2003 §4.1.1): depth precision where it matters."""
+    pos = np.asarray(cam.GetPosition())
+    dop = np.asarray(cam.GetDirectionOfProjection())
+    z = (points - pos) @ dop
+    zmin, zmax = float(z.min()), float(z.max())
+    margin = _CLIP_MARGIN * max(zmax - zmin, 1e-12 * max(abs(zmax), 1.0))
+    if cam.GetParallelProjection() and zmin - margin <= 0.0:
+        # Moving an orthographic eye backwards changes nothing in the image.
+        shift = margin - zmin + (zmax - zmin)
+        cam.SetPosition(*(pos - shift * dop))
+        zmin += shift
+        zmax += shift
+    if zmax <= 0.0:
+        raise InputError("camera: all of the scene is behind the camera")
+    near = zmin - margin
+    far = zmax + margin
+    if near <= far * 1e-4:
+        near = far * 1e-4  # the eye is inside the data: keep the depth buffer usable
+    cam.SetClippingRange(near, far)
+
+
+def _interpolate_named(
+    surfaces: list[Surface], name: str, tid: np.ndarray, bary: np.ndarray, triangles, n_pts
+) -> np.ndarray:
+    """One requested array, from each object's point or cell data; NaN where an object lacks it."""
+    found = [s.array(name) for s in surfaces]
+    comps = {v.reshape(v.shape[0], -1).shape[1] for f in found if f is not None for v in [f[1]]}
+    if len(comps) > 1:
+        raise InputError(f"scalars: array {name!r} has different component counts {sorted(comps)}")
+    k = comps.pop()
+    n_tri = triangles.shape[0]
+    tri_off = np.cumsum([0] + [s.triangles.shape[0] for s in surfaces])
+    has_point = any(f is not None and f[0] == "point" for f in found)
+    has_cell = any(f is not None and f[0] == "cell" for f in found)
+    out = None
+    if has_point:
+        vals = np.full((int(n_pts[-1]), k), np.nan, dtype=np.float64)
+        for i, f in enumerate(found):
+            if f is not None and f[0] == "point":
+                vals[n_pts[i] : n_pts[i + 1]] = f[1].reshape(f[1].shape[0], k)
+        out = _kernels.interpolate_points(tid, bary, triangles, vals)
+    if has_cell:
+        vals = np.full((n_tri, k), np.nan, dtype=np.float32)
+        for i, (s, f) in enumerate(zip(surfaces, found)):
+            if f is not None and f[0] == "cell":
+                vals[tri_off[i] : tri_off[i + 1]] = f[1].reshape(f[1].shape[0], k)[s.cell_ids]
+        cells = _kernels.lookup_cells(tid, vals)
+        out = cells if out is None else np.where(np.isnan(out), cells, out)
+    assert out is not None
+    return out[..., 0] if k == 1 else out
+
+
+def capture(
+    scene: object,
+    *,
+    window_size: Sequence[int] | None = None,
+    camera: object = None,
+    parallel_projection: bool | None = None,
+    scalars: Sequence[str] | str = (),
+    supersample: int = 1,
+    feature_angle: float = 30.0,
+    progress_bar: bool = False,
+) -> GBuffer:
+    """Render a scene offscreen with VTK and return its float32 G-buffers.
+
+    Parameters
+    ----------
+    scene : pyvista.DataSet, sequence of datasets, or pyvista.Plotter
+        Surfaces to capture. Volumes/grids are captured by their outer surface; lines and
+        vertices are not surfaces and are left out. A Plotter contributes its visible actors
+        (with their transforms) and, unless ``camera`` is given, its camera. Nothing given is
+        modified.
+    window_size : (int, int), optional
+        Output image ``(width, height)``; default the Plotter's size or ``(1024, 768)``.
+    camera : str, vtkCamera, CameraInfo or (position, focal_point, view_up), optional
+        A view name (``'iso'``, ``'xy'``, ``'xz'``, ``'yz'``, ``'yx'``, ``'zx'``, ``'zy'``) is fitted
+        to the data like PyVista's ``view_*``; a camera or camera position is used as given
+        (a copy). The clipping range is always set tightly around the data.
+    parallel_projection : bool, optional
+        Force orthographic (True) or perspective (False); default: as the camera is.
+    scalars : str or sequence of str
+        Point or cell arrays to capture into ``GBuffer.scalars`` (NaN on objects lacking them).
+    supersample : int, default: 1
+        Render at ``supersample`` times the window size; :meth:`GBuffer.downsample` averages
+        results back to the window size (antialiasing).
+    feature_angle : float, default: 30.0
+        For data without point normals: normals are computed and split at edges sharper than
+        this many degrees (PyVista's ``split_sharp_edges``); 180 smooths everything.
+    progress_bar : bool, default: False
+        Show a progress bar (PyVista convention).
+
+    Returns
+    -------
+    GBuffer
+        Buffers of shape ``(height * supersample, width * supersample)``.
+
+    Raises
+    ------
+    InputError
+        Empty scene, bad window size, NaN coordinates, unknown scalar name, bad camera.
+    """
+    if window_size is None:
+        window_size = tuple(scene.window_size) if _is_plotter(scene) else DEFAULT_WINDOW_SIZE
+    width, height = _check_window_size(window_size)
+    if isinstance(supersample, bool) or not isinstance(supersample, (int, np.integer)) or supersample < 1:
+        raise InputError(f"supersample: expected a positive integer, got {supersample!r}")
+    size = (width * int(supersample), height * int(supersample))
+    if max(size) > MAX_BUFFER_SIZE:
+        raise InputError(
+            f"window_size x supersample = {size[0]}x{size[1]} exceeds {MAX_BUFFER_SIZE} pixels "
+            "per side"
+        )
+    if not (0.0 <= float(feature_angle) <= 180.0):
+        raise InputError(f"feature_angle: expected degrees in [0, 180], got {feature_angle!r}")
+    names = _check_scalars(scalars)
+
+    with progress(progress_bar, 4, "capture") as bar:
+        surfaces = collect_surfaces(scene, feature_angle=float(feature_angle))
+        for name in names:
+            if all(s.array(name) is None for s in surfaces):
+                avail = sorted(
+                    {k for s in surfaces for k in (*s.mesh.point_data.keys(), *s.mesh.cell_data.keys())
+                     if not k.startswith("__sciviz")}
+                )
+                raise InputError(
+                    f"scalars: no object in the scene has an array named {name!r}; "
+                    f"available: {avail}"
+                )
+        points, normals, triangles, tri_obj, tri_cell, n_pts = _merge(surfaces)
+        bar.step("render")
+
+        cam, reset = _resolve_camera(camera, scene, parallel_projection)
+        renderer = IdRenderer(points, triangles)
+        try:
+            renderer.window.SetSize(*size)
+            if reset:
+                lo, hi = points.min(axis=0), points.max(axis=0)
+                cam.SetFocalPoint(*((lo + hi) / 2))
+                cam.SetPosition(*((lo + hi) / 2 + np.asarray(cam.GetPosition())))
+                renderer.renderer.SetActiveCamera(cam)
+                renderer.renderer.ResetCamera(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2])
+            _fit_clipping(cam, points)
+            tid = renderer.render(cam, size)
+        finally:
+            renderer.close()
+        info = CameraInfo.from_vtk(cam, size)
+        bar.step("geometry")
+
+        inv_clip = np.linalg.inv(info.world_to_clip())
+        world, depth, normal, bary = _kernels.resolve_hits(
+            tid,
+            points,
+            triangles,
+            normals,
+            inv_clip,
+            np.asarray(info.position, dtype=np.float64),
+            info.direction,
+            np.ascontiguousarray(info.view_matrix_array[:3, :3]),
+            info.parallel_projection,
+        )
+        mask = tid >= 0
+        safe = np.where(mask, tid, 0)
+        object_id = np.where(mask, tri_obj[safe], -1).astype(np.int32)
+        cell_id = np.where(mask, tri_cell[safe], -1).astype(np.int64)
+        sz = info.sz_from_depth(depth)
+        bar.step("attributes")
+
+        uv = None
+        tcs = [s.texture_coordinates() for s in surfaces]
+        if any(t is not None for t in tcs):
+            vals = np.full((int(n_pts[-1]), 2), np.nan, dtype=np.float64)
+            for i, t in enumerate(tcs):
+                if t is not None:
+                    vals[n_pts[i] : n_pts[i + 1]] = t
+            uv = _kernels.interpolate_points(tid, bary, triangles, vals)
+        captured = {
+            n: _interpolate_named(surfaces, n, tid, bary, triangles, n_pts) for n in names
+        }
+        bar.step("done")
+
+    return GBuffer(
+        depth=depth,
+        sz=sz,
+        normal=normal,
+        world=world,
+        object_id=object_id,
+        cell_id=cell_id,
+        mask=mask,
+        camera=info,
+        uv=uv,
+        scalars=captured,
+        supersample=int(supersample),
+        object_names=[s.name for s in surfaces],
+    )

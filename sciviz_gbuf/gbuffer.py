@@ -1,0 +1,269 @@
+"""The G-buffer: per-pixel geometric properties of a rendered scene (Saito & Takahashi 1990 §2).
+
+A :class:`GBuffer` is captured once and re-used for any number of enhancements; it saves and
+loads losslessly (``.npz`` or VTK ``.vti``) so enhancement can be re-run without re-rendering.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .camera import CameraInfo
+from .errors import InputError
+
+__all__ = ["FORMAT_VERSION", "GBuffer"]
+
+FORMAT_VERSION = 1
+_SCALAR_PREFIX = "scalars:"
+_META = "sciviz_gbuf_meta"
+# (name, dtype, trailing shape) of the fixed channels
+_CHANNELS: tuple[tuple[str, type, tuple[int, ...]], ...] = (
+    ("depth", np.float32, ()),
+    ("sz", np.float32, ()),
+    ("normal", np.float32, (3,)),
+    ("world", np.float32, (3,)),
+    ("object_id", np.int32, ()),
+    ("cell_id", np.int64, ()),
+    ("mask", np.bool_, ()),
+)
+
+
+@dataclass(eq=False)
+class GBuffer:
+    """Float32 G-buffers of one view (see ``DESIGN.md`` for the contract).
+
+    Attributes
+    ----------
+    depth : (H, W) float32
+        Linear eye-space distance along the viewing axis; NaN on background.
+    sz : (H, W) float32
+        Saito's perspective depth ``d**2 / (w z_v)`` (1990 Eq. 6), in pixels; larger is nearer.
+    normal : (H, W, 3) float32
+        Unit eye-space normals (x right, y up, z towards the viewer), turned to the viewer's side
+        of the surface.
+    world : (H, W, 3) float32
+        World coordinates of the visible surface point.
+    object_id : (H, W) int32
+        Index of the dataset in the scene; -1 on background.
+    cell_id : (H, W) int64
+        Cell of that dataset; -1 on background.
+    mask : (H, W) bool
+        Coverage.
+    camera : CameraInfo
+        The camera that made the buffers (its ``window_size`` is the buffers' size).
+    uv : (H, W, 2) float32 or None
+        Texture coordinates where the data has them (NaN elsewhere).
+    scalars : dict of str to ndarray
+        Requested point/cell arrays, (H, W) float32 (or (H, W, k) for k-component arrays).
+    supersample : int
+        Factor by which the buffers exceed the output image size (see :meth:`downsample`).
+    object_names : list of str
+        Label of each object id.
+
+    Row 0 of every array is the top image row, as in a PNG.
+    """
+
+    depth: np.ndarray
+    sz: np.ndarray
+    normal: np.ndarray
+    world: np.ndarray
+    object_id: np.ndarray
+    cell_id: np.ndarray
+    mask: np.ndarray
+    camera: CameraInfo
+    uv: np.ndarray | None = None
+    scalars: dict[str, np.ndarray] = field(default_factory=dict)
+    supersample: int = 1
+    object_names: list[str] = field(default_factory=list)
+
+    # ------------------------------------------------------------------ basics
+    @property
+    def shape(self) -> tuple[int, int]:
+        """``(H, W)`` of the buffers."""
+        return tuple(self.depth.shape)  # type: ignore[return-value]
+
+    @property
+    def output_shape(self) -> tuple[int, int]:
+        """``(H, W)`` of the image after :meth:`downsample`."""
+        h, w = self.shape
+        return h // self.supersample, w // self.supersample
+
+    def channels(self) -> dict[str, np.ndarray]:
+        """All arrays by name (fixed channels, ``uv`` if present, ``scalars:<name>``)."""
+        out = {name: getattr(self, name) for name, _, _ in _CHANNELS}
+        if self.uv is not None:
+            out["uv"] = self.uv
+        for k, v in self.scalars.items():
+            out[_SCALAR_PREFIX + k] = v
+        return out
+
+    def world_normal(self) -> np.ndarray:
+        """Normals rotated back to world coordinates, (H, W, 3) float32."""
+        rot = self.camera.view_matrix_array[:3, :3]
+        return (self.normal.astype(np.float64) @ rot).astype(np.float32)
+
+    def downsample(self, image: np.ndarray) -> np.ndarray:
+        """Box-filter an image of this buffer's size to the output size (antialiasing).
+
+        NaN samples are left out of each ``k x k`` average; a pixel whose samples are all NaN
+        stays NaN.
+        """
+        k = self.supersample
+        img = np.asarray(image)
+        if img.shape[:2] != self.shape:
+            raise InputError(
+                f"image: expected shape {self.shape} (this G-buffer), got {img.shape[:2]}"
+            )
+        if k == 1:
+            return img.copy()
+        h, w = self.output_shape
+        blocks = img[: h * k, : w * k].reshape(h, k, w, k, *img.shape[2:]).astype(np.float32)
+        with np.errstate(invalid="ignore"):
+            return np.nanmean(blocks, axis=(1, 3)) if np.isnan(blocks).any() else blocks.mean(
+                axis=(1, 3)
+            )
+
+    def __repr__(self) -> str:
+        h, w = self.shape
+        extra = (["uv"] if self.uv is not None else []) + [
+            _SCALAR_PREFIX + k for k in self.scalars
+        ]
+        return (
+            f"GBuffer({w}x{h}, supersample={self.supersample}, "
+            f"coverage={self.mask.mean():.1%}, objects={len(self.object_names)}, "
+            f"projection={'parallel' if self.camera.parallel_projection else 'perspective'}"
+            + (f", extra={extra}" if extra else "")
+            + ")"
+        )
+
+    # ------------------------------------------------------------------ meta
+    def _meta(self) -> str:
+        return json.dumps(
+            {
+                "format": "sciviz_gbuf",
+                "version": FORMAT_VERSION,
+                "camera": json.loads(self.camera.to_json()),
+                "supersample": self.supersample,
+                "object_names": list(self.object_names),
+                "scalars": list(self.scalars),
+            }
+        )
+
+    @classmethod
+    def _from_arrays(cls, arrays: dict[str, np.ndarray], meta_text: str, path: str) -> GBuffer:
+        try:
+            meta = json.loads(meta_text)
+            if meta.get("format") != "sciviz_gbuf":
+                raise ValueError("not a sciviz_gbuf G-buffer")
+            if int(meta["version"]) > FORMAT_VERSION:
+                raise ValueError(f"format version {meta['version']} is newer than this package")
+            camera = CameraInfo.from_json(json.dumps(meta["camera"]))
+        except (ValueError, KeyError, TypeError) as exc:
+            raise InputError(f"{path}: not a valid G-buffer file ({exc})") from exc
+        missing = [name for name, _, _ in _CHANNELS if name not in arrays]
+        if missing:
+            raise InputError(f"{path}: G-buffer file lacks channel(s) {missing}")
+        h, w = arrays["depth"].shape[:2]
+        kw: dict[str, np.ndarray] = {}
+        for name, dtype, trailing in _CHANNELS:
+            a = np.asarray(arrays[name])
+            if a.shape != (h, w, *trailing):
+                raise InputError(
+                    f"{path}: channel {name!r} has shape {a.shape}, expected {(h, w, *trailing)}"
+                )
+            kw[name] = np.ascontiguousarray(a.astype(dtype, copy=False))
+        scalars = {}
+        for name in meta.get("scalars", []):
+            key = _SCALAR_PREFIX + name
+            if key not in arrays:
+                raise InputError(f"{path}: G-buffer file lacks scalar {name!r}")
+            scalars[name] = np.ascontiguousarray(arrays[key])
+        uv = np.ascontiguousarray(arrays["uv"]) if "uv" in arrays else None
+        return cls(
+            camera=camera,
+            uv=uv,
+            scalars=scalars,
+            supersample=int(meta.get("supersample", 1)),
+            object_names=list(meta.get("object_names", [])),
+            **kw,
+        )
+
+    # ------------------------------------------------------------------ io
+    def save(self, path: str | os.PathLike) -> Path:
+        """Write to ``.npz`` (NumPy, compressed) or ``.vti`` (VTK XML image); lossless.
+
+        Returns the path written.
+        """
+        p = Path(path)
+        suffix = p.suffix.lower()
+        if suffix == ".npz":
+            arrays = self.channels()
+            np.savez_compressed(p, **arrays, **{_META: np.array(self._meta())})
+        elif suffix == ".vti":
+            self.to_pyvista().save(p)
+        else:
+            raise InputError(f"{p}: G-buffers are saved as .npz or .vti, not {suffix!r}")
+        return p
+
+    @classmethod
+    def load(cls, path: str | os.PathLike) -> GBuffer:
+        """Read a file written by :meth:`save`."""
+        p = Path(path)
+        if not p.is_file():
+            raise InputError(f"{p}: no such G-buffer file")
+        suffix = p.suffix.lower()
+        if suffix == ".npz":
+            try:
+                with np.load(p, allow_pickle=False) as z:
+                    arrays = {k: z[k] for k in z.files}
+            except (OSError, ValueError) as exc:
+                raise InputError(f"{p}: cannot read as .npz ({exc})") from exc
+            if _META not in arrays:
+                raise InputError(f"{p}: not a sciviz_gbuf G-buffer (no {_META!r} record)")
+            return cls._from_arrays(arrays, str(arrays.pop(_META)), str(p))
+        if suffix == ".vti":
+            import pyvista as pv
+
+            try:
+                img = pv.read(p)
+            except Exception as exc:  # VTK readers raise many types
+                raise InputError(f"{p}: cannot read as VTK image ({exc})") from exc
+            return cls.from_pyvista(img, source=str(p))
+        raise InputError(f"{p}: G-buffers are loaded from .npz or .vti, not {suffix!r}")
+
+    def to_pyvista(self):
+        """A ``pyvista.ImageData`` holding every channel as a point array (one point a pixel).
+
+        VTK images start at the bottom row, so rows are flipped; pixel (i, j) of the arrays is
+        point (j, H-1-i). The camera and metadata are kept in field data.
+        """
+        import pyvista as pv
+
+        h, w = self.shape
+        img = pv.ImageData(dimensions=(w, h, 1))
+        for name, arr in self.channels().items():
+            a = np.asarray(arr)
+            if a.dtype == np.bool_:
+                a = a.astype(np.uint8)
+            flat = a[::-1].reshape(h * w, *a.shape[2:])
+            img.point_data[name] = np.ascontiguousarray(flat)
+        img.field_data[_META] = np.array([self._meta()])
+        return img
+
+    @classmethod
+    def from_pyvista(cls, image, *, source: str = "image") -> GBuffer:
+        """Inverse of :meth:`to_pyvista`."""
+        if _META not in image.field_data:
+            raise InputError(f"{source}: not a sciviz_gbuf G-buffer (no {_META!r} field data)")
+        w, h, _ = image.dimensions
+        arrays = {}
+        for name in image.point_data.keys():
+            a = np.asarray(image.point_data[name])
+            arrays[name] = a.reshape(h, w, *a.shape[1:])[::-1]
+        meta = image.field_data[_META]
+        return cls._from_arrays(arrays, str(meta[0]), source)
