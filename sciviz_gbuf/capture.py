@@ -165,9 +165,10 @@ def _interpolate_named(
         out = _kernels.interpolate_points(tid, bary, triangles, vals)
     if has_cell:
         vals = np.full((n_tri, k), np.nan, dtype=np.float32)
-        for i, (s, f) in enumerate(zip(surfaces, found)):
+        for i, f in enumerate(found):
             if f is not None and f[0] == "cell":
-                vals[tri_off[i] : tri_off[i + 1]] = f[1].reshape(f[1].shape[0], k)[s.cell_ids]
+                # cell data of the triangulated surface is already one value per triangle
+                vals[tri_off[i] : tri_off[i + 1]] = f[1].reshape(f[1].shape[0], k)
         cells = _kernels.lookup_cells(tid, vals)
         out = cells if out is None else np.where(np.isnan(out), cells, out)
     assert out is not None

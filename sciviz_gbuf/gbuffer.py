@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import os
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -123,10 +124,11 @@ class GBuffer:
             return img.copy()
         h, w = self.output_shape
         blocks = img[: h * k, : w * k].reshape(h, k, w, k, *img.shape[2:]).astype(np.float32)
-        with np.errstate(invalid="ignore"):
-            return np.nanmean(blocks, axis=(1, 3)) if np.isnan(blocks).any() else blocks.mean(
-                axis=(1, 3)
-            )
+        if not np.isnan(blocks).any():
+            return blocks.mean(axis=(1, 3))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN blocks stay NaN
+            return np.nanmean(blocks, axis=(1, 3))
 
     def __repr__(self) -> str:
         h, w = self.shape

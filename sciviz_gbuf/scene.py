@@ -15,6 +15,7 @@ import numpy as np
 import pyvista as pv
 from vtkmodules.vtkCommonDataModel import vtkDataObject, vtkDataSet, vtkMultiBlockDataSet
 from vtkmodules.vtkFiltersCore import vtkPolyDataNormals, vtkTriangleFilter
+from vtkmodules.vtkFiltersGeometry import vtkDataSetSurfaceFilter
 
 from .errors import InputError
 
@@ -136,7 +137,10 @@ def _surface_polydata(name: str, data: object) -> pv.PolyData:
     else:
         src = ds.copy(deep=False)
         src.cell_data[_CELL_ID] = np.arange(ds.n_cells, dtype=np.int64)
-        poly = src.extract_surface(pass_pointid=False, pass_cellid=False)
+        surf = vtkDataSetSurfaceFilter()
+        surf.SetInputData(src)
+        surf.Update()
+        poly = pv.wrap(surf.GetOutput())
     if poly.GetNumberOfPolys() == 0 and poly.GetNumberOfStrips() == 0:
         raise InputError(f"{name}: the dataset has no surface (polygon) cells to capture")
     return poly
