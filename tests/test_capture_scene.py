@@ -74,7 +74,8 @@ def test_cell_ids_match_vtk_cell_locator():
 
 def test_polygons_and_strips_keep_original_cell_ids():
     # quads and a triangle strip: triangles trace back to the user's cells
-    grid = pv.ImageData(dimensions=(5, 4, 1)).cast_to_unstructured_grid().extract_geometry()
+    grid = pv.Plane(center=(2, 1.5, 0), i_size=4, j_size=3, i_resolution=4, j_resolution=3)
+    grid.clear_data()
     grid.cell_data["label"] = np.arange(grid.n_cells, dtype=np.float64) * 10
     strip = pv.PolyData(
         np.array([[0, 0, 1], [1, 0, 1], [0, 1, 1.2], [1, 1, 1.2], [0, 2, 1.4], [1, 2, 1.4]], float),
