@@ -9,6 +9,10 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
+# Without a display, let PyVista's own Plotter go straight to EGL instead of trying X first.
+if not os.environ.get("DISPLAY"):
+    os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
+
 SHARED_DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 
 
@@ -73,10 +77,3 @@ def shared_data() -> Path:
     if not SHARED_DATA.is_dir():
         pytest.skip("../shared/data is not beside the project")
     return SHARED_DATA
-
-
-@pytest.fixture(autouse=True)
-def _no_display(monkeypatch):
-    # Tests run headless like CI, whatever the developer's shell has.
-    if os.environ.get("DISPLAY") and os.environ.get("SCIVIZ_GBUF_TEST_DISPLAY") != "1":
-        monkeypatch.delenv("DISPLAY")

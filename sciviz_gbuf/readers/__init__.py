@@ -1,1 +1,5 @@
-"""Readers."""
+"""Readers: files (meshes, and later DEM grids, DICOM series, Bezier patches) -> PyVista datasets."""
+
+from .mesh import read_mesh
+
+__all__ = ["read_mesh"]

@@ -1,0 +1,5 @@
+"""``python -m sciviz_gbuf``: the same as the ``sciviz-gbuf`` command."""
+
+from .cli import main
+
+raise SystemExit(main())
