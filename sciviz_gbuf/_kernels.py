@@ -65,13 +65,21 @@ def resolve_hits(tid, points, triangles, normals, inv_clip, eye, view_dir, rot, 
             v0 = points[i0]
             e1 = points[i1] - v0
             e2 = points[i2] - v0
-            pv = np.array([d[1] * e2[2] - d[2] * e2[1],
-                           d[2] * e2[0] - d[0] * e2[2],
-                           d[0] * e2[1] - d[1] * e2[0]])
+            pv = np.array(
+                [
+                    d[1] * e2[2] - d[2] * e2[1],
+                    d[2] * e2[0] - d[0] * e2[2],
+                    d[0] * e2[1] - d[1] * e2[0],
+                ]
+            )
             det = e1[0] * pv[0] + e1[1] * pv[1] + e1[2] * pv[2]
-            g = np.array([e1[1] * e2[2] - e1[2] * e2[1],
-                          e1[2] * e2[0] - e1[0] * e2[2],
-                          e1[0] * e2[1] - e1[1] * e2[0]])
+            g = np.array(
+                [
+                    e1[1] * e2[2] - e1[2] * e2[1],
+                    e1[2] * e2[0] - e1[0] * e2[2],
+                    e1[0] * e2[1] - e1[1] * e2[0],
+                ]
+            )
             b1 = 1.0 / 3.0
             b2 = 1.0 / 3.0
             tt = np.nan
@@ -79,9 +87,13 @@ def resolve_hits(tid, points, triangles, normals, inv_clip, eye, view_dir, rot, 
                 tv = p0 - v0
                 inv_det = 1.0 / det
                 b1 = (tv[0] * pv[0] + tv[1] * pv[1] + tv[2] * pv[2]) * inv_det
-                q = np.array([tv[1] * e1[2] - tv[2] * e1[1],
-                              tv[2] * e1[0] - tv[0] * e1[2],
-                              tv[0] * e1[1] - tv[1] * e1[0]])
+                q = np.array(
+                    [
+                        tv[1] * e1[2] - tv[2] * e1[1],
+                        tv[2] * e1[0] - tv[0] * e1[2],
+                        tv[0] * e1[1] - tv[1] * e1[0],
+                    ]
+                )
                 b2 = (d[0] * q[0] + d[1] * q[1] + d[2] * q[2]) * inv_det
                 tt = (e2[0] * q[0] + e2[1] * q[1] + e2[2] * q[2]) * inv_det
             b0 = 1.0 - b1 - b2

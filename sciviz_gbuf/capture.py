@@ -36,7 +36,7 @@ def _check_window_size(window_size: object) -> tuple[int, int]:
     try:
         w, h = window_size  # type: ignore[misc]
         ok = all(float(v) == int(v) for v in (w, h))
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         ok = False
     if not ok or int(w) <= 0 or int(h) <= 0:
         raise InputError(
@@ -198,8 +198,8 @@ def capture(
     window_size : (int, int), optional
         Output image ``(width, height)``; default the Plotter's size or ``(1024, 768)``.
     camera : str, vtkCamera, CameraInfo or (position, focal_point, view_up), optional
-        A view name (``'iso'``, ``'xy'``, ``'xz'``, ``'yz'``, ``'yx'``, ``'zx'``, ``'zy'``) is fitted
-        to the data like PyVista's ``view_*``; a camera or camera position is used as given
+        A view name (``'iso'``, ``'xy'``, ``'xz'``, ``'yz'``, ``'yx'``, ``'zx'``, ``'zy'``) is
+        fitted to the data like PyVista's ``view_*``; a camera or camera position is used as given
         (a copy). The clipping range is always set tightly around the data.
     parallel_projection : bool, optional
         Force orthographic (True) or perspective (False); default: as the camera is.
@@ -227,7 +227,11 @@ def capture(
     if window_size is None:
         window_size = tuple(scene.window_size) if _is_plotter(scene) else DEFAULT_WINDOW_SIZE
     width, height = _check_window_size(window_size)
-    if isinstance(supersample, bool) or not isinstance(supersample, (int, np.integer)) or supersample < 1:
+    if (
+        isinstance(supersample, bool)
+        or not isinstance(supersample, (int, np.integer))
+        or supersample < 1
+    ):
         raise InputError(f"supersample: expected a positive integer, got {supersample!r}")
     size = (width * int(supersample), height * int(supersample))
     if max(size) > MAX_BUFFER_SIZE:
@@ -244,8 +248,12 @@ def capture(
         for name in names:
             if all(s.array(name) is None for s in surfaces):
                 avail = sorted(
-                    {k for s in surfaces for k in (*s.mesh.point_data.keys(), *s.mesh.cell_data.keys())
-                     if not k.startswith("__sciviz")}
+                    {
+                        k
+                        for s in surfaces
+                        for k in (*s.mesh.point_data.keys(), *s.mesh.cell_data.keys())
+                        if not k.startswith("__sciviz")
+                    }
                 )
                 raise InputError(
                     f"scalars: no object in the scene has an array named {name!r}; "
@@ -298,9 +306,7 @@ def capture(
                 if t is not None:
                     vals[n_pts[i] : n_pts[i + 1]] = t
             uv = _kernels.interpolate_points(tid, bary, triangles, vals)
-        captured = {
-            n: _interpolate_named(surfaces, n, tid, bary, triangles, n_pts) for n in names
-        }
+        captured = {n: _interpolate_named(surfaces, n, tid, bary, triangles, n_pts) for n in names}
         bar.step("done")
 
     return GBuffer(

@@ -17,7 +17,9 @@ def _size(text: str) -> tuple[int, int]:
     try:
         w, h = (int(v) for v in text.lower().split("x"))
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT such as 1024x768, got {text!r}")
+        raise argparse.ArgumentTypeError(
+            f"expected WIDTHxHEIGHT such as 1024x768, got {text!r}"
+        ) from None
     return w, h
 
 
@@ -27,8 +29,10 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     files = run_demo(args.output, window_size=args.size, progress_bar=args.progress)
     index = next((f for f in files if f.name == "index.html"), None)
-    print(f"wrote {len(files)} files to {Path(args.output).resolve()} "
-          f"in {time.perf_counter() - t0:.1f} s")
+    print(
+        f"wrote {len(files)} files to {Path(args.output).resolve()} "
+        f"in {time.perf_counter() - t0:.1f} s"
+    )
     if index is not None:
         print(f"open {index.resolve()}")
     return 0

@@ -132,9 +132,7 @@ class GBuffer:
 
     def __repr__(self) -> str:
         h, w = self.shape
-        extra = (["uv"] if self.uv is not None else []) + [
-            _SCALAR_PREFIX + k for k in self.scalars
-        ]
+        extra = (["uv"] if self.uv is not None else []) + [_SCALAR_PREFIX + k for k in self.scalars]
         return (
             f"GBuffer({w}x{h}, supersample={self.supersample}, "
             f"coverage={self.mask.mean():.1%}, objects={len(self.object_names)}, "

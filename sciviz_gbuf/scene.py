@@ -111,9 +111,7 @@ def scene_items(scene: object) -> list[tuple[str, object, np.ndarray | None]]:
     items = []
     for i, ds in enumerate(seq):
         if not isinstance(ds, (vtkDataSet, vtkMultiBlockDataSet)):
-            raise InputError(
-                f"scene[{i}]: expected a PyVista/VTK dataset, got {type(ds).__name__}"
-            )
+            raise InputError(f"scene[{i}]: expected a PyVista/VTK dataset, got {type(ds).__name__}")
         items.append((f"dataset {i} ({type(ds).__name__})", ds, None))
     return items
 

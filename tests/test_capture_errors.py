@@ -117,8 +117,10 @@ def test_any_window_size_gives_consistent_buffers(w, h, parallel, view):
     size=st.one_of(
         st.tuples(st.integers(-5, 0), st.integers(1, 5)),
         st.tuples(st.integers(1, 5), st.integers(-5, 0)),
-        st.tuples(st.floats(allow_nan=True).filter(lambda v: v != int(v) if np.isfinite(v) else True),
-                  st.just(4)),
+        st.tuples(
+            st.floats(allow_nan=True).filter(lambda v: v != int(v) if np.isfinite(v) else True),
+            st.just(4),
+        ),
         st.text(max_size=3),
         st.none().map(lambda _: (1,)),
     )

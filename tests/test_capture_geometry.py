@@ -92,8 +92,13 @@ def test_sphere_depth_world_normals_sz(sphere, kind):
     else:
         w = 2 * dist * np.tan(np.radians(cam.view_angle) / 2) / h
         sz_true = dist**2 / (w * depth_true)
-    assert np.allclose(g.sz[inner], dist**2 / (w * g.depth[inner]) if not cam.parallel_projection
-                       else (2 * dist - g.depth[inner]) / w, rtol=1e-6)
+    assert np.allclose(
+        g.sz[inner],
+        dist**2 / (w * g.depth[inner])
+        if not cam.parallel_projection
+        else (2 * dist - g.depth[inner]) / w,
+        rtol=1e-6,
+    )
     assert np.allclose(g.sz[inner][centre], sz_true[inner][centre], rtol=1e-5)
     assert cam.pixel_size == pytest.approx(w, rel=1e-12)
 
@@ -111,9 +116,12 @@ def test_sphere_depth_world_normals_sz(sphere, kind):
 
 
 def _tilted_plane():
-    plane = pv.Plane(center=(0, 0, 0), direction=(0, 0, 1), i_size=4, j_size=3,
-                     i_resolution=3, j_resolution=2)
-    plane = plane.rotate_x(35, inplace=False).rotate_y(-20, inplace=False).translate((0.5, 0.2, -0.3))
+    plane = pv.Plane(
+        center=(0, 0, 0), direction=(0, 0, 1), i_size=4, j_size=3, i_resolution=3, j_resolution=2
+    )
+    plane = (
+        plane.rotate_x(35, inplace=False).rotate_y(-20, inplace=False).translate((0.5, 0.2, -0.3))
+    )
     n = np.asarray(plane.point_data["Normals"][0], dtype=np.float64)
     return plane, n / np.linalg.norm(n), np.asarray(plane.points[0], dtype=np.float64)
 
@@ -122,7 +130,9 @@ def _tilted_plane():
 def test_tilted_plane_exact(kind):
     plane, n, p0 = _tilted_plane()
     cam = [(3.0, -6.0, 5.0), (0.4, 0.1, -0.2), (0, 0, 1)]
-    g = sg.capture(plane, window_size=(300, 220), camera=cam, parallel_projection=kind == "parallel")
+    g = sg.capture(
+        plane, window_size=(300, 220), camera=cam, parallel_projection=kind == "parallel"
+    )
     c = g.camera
     o, d = rays_by_hand(c)
     t = ((p0 - o) @ n) / (d @ n)
@@ -134,7 +144,10 @@ def test_tilted_plane_exact(kind):
     view /= np.linalg.norm(view)
     depth_true = (world - eye) @ view
     assert (np.abs(g.depth - depth_true)[inner] / depth_true[inner]).max() <= 1e-5
-    err = np.linalg.norm(g.world - world, axis=-1)[inner] / np.linalg.norm(world - eye, axis=-1)[inner]
+    err = (
+        np.linalg.norm(g.world - world, axis=-1)[inner]
+        / np.linalg.norm(world - eye, axis=-1)[inner]
+    )
     assert err.max() <= 1e-5
     # the plane's normal, turned towards the viewer, in eye space: <= 0.01 degree everywhere
     n_eye = to_eye(c, n if (eye - p0) @ n > 0 else -n)
@@ -151,7 +164,7 @@ def test_sphere_normals_from_data_are_used(sphere):
     s.point_data["Normals"] = (np.asarray(s.points) - CENTER) / RADIUS
     s.point_data.active_normals_name = "Normals"  # type: ignore[attr-defined]
     g = sg.capture(s, window_size=(200, 200), camera="xy")
-    hit, world, _ = _sphere_hits(g.camera)
+    _, world, _ = _sphere_hits(g.camera)
     inner = interior(g.mask)
     n_true = to_eye(g.camera, (world - CENTER) / RADIUS)
     ang = angle_deg(g.normal[inner], n_true[inner])

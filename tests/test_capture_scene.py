@@ -5,12 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import pyvista as pv
-from vtkmodules.vtkCommonCore import mutable, vtkIdList, vtkPoints
+from conftest import interior, rays_by_hand
+from vtkmodules.vtkCommonCore import mutable
 from vtkmodules.vtkCommonDataModel import vtkCellLocator
 
 import sciviz_gbuf as sg
 from sciviz_gbuf import _render
-from conftest import interior, rays_by_hand
 
 
 def _two_objects():
@@ -40,7 +40,9 @@ def _locator_picks(mesh, g, rows, cols):
 
 def test_object_ids_distinguish_datasets():
     sphere, box = _two_objects()
-    g = sg.capture([sphere, box], window_size=(240, 200), camera=[(4, -6, 5), (0, 0, -0.5), (0, 0, 1)])
+    g = sg.capture(
+        [sphere, box], window_size=(240, 200), camera=[(4, -6, 5), (0, 0, -0.5), (0, 0, 1)]
+    )
     assert g.object_names and len(g.object_names) == 2
     assert set(np.unique(g.object_id)) == {-1, 0, 1}
     # each object's pixels lie on that object: sphere points at radius 1, box points in the box

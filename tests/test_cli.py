@@ -17,8 +17,12 @@ def test_capture_and_info_on_the_cad_part(shared_data, tmp_path, capsys):
     stl = shared_data / "meshes" / "vtkdata_42400-IDGH.stl"
     before = stl.read_bytes()
     out = tmp_path / "part.npz"
-    assert main(["capture", str(stl), "-o", str(out), "--size", "200x150", "--view", "xy",
-                 "--parallel"]) == 0
+    assert (
+        main(
+            ["capture", str(stl), "-o", str(out), "--size", "200x150", "--view", "xy", "--parallel"]
+        )
+        == 0
+    )
     g = sg.GBuffer.load(out)
     assert g.shape == (150, 200) and g.camera.parallel_projection
     mesh = read_mesh(stl)
@@ -45,13 +49,17 @@ def test_cli_errors_are_clear(tmp_path, capsys):
 def test_read_mesh_rejects_unknown_format(tmp_path):
     f = tmp_path / "mesh.xyz123"
     f.write_text("1 2 3\n")
-    with pytest.raises(sg.InputError, match="mesh.xyz123"):
+    with pytest.raises(sg.InputError, match=r"mesh\.xyz123"):
         read_mesh(f)
 
 
 def test_python_m_entry_point():
-    r = subprocess.run([sys.executable, "-m", "sciviz_gbuf", "--version"], capture_output=True,
-                       text=True, check=False)
+    r = subprocess.run(
+        [sys.executable, "-m", "sciviz_gbuf", "--version"],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
     assert r.returncode == 0 and sg.__version__ in r.stdout
 
 

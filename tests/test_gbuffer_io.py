@@ -47,7 +47,9 @@ def test_to_pyvista_orientation_and_arrays(gbuf):
     assert img.dimensions == (w, h, 1)
     # VTK's first point is the bottom-left pixel
     assert np.array_equal(img.point_data["depth"][:w], gbuf.depth[-1], equal_nan=True)
-    assert np.array_equal(img.point_data["normal"].reshape(h, w, 3)[::-1], gbuf.normal, equal_nan=True)
+    assert np.array_equal(
+        img.point_data["normal"].reshape(h, w, 3)[::-1], gbuf.normal, equal_nan=True
+    )
     assert "scalars:height" in img.point_data
     back = sg.GBuffer.from_pyvista(img)
     _assert_identical(gbuf, back)
@@ -67,17 +69,17 @@ def test_load_rejects_bad_files(tmp_path):
         sg.GBuffer.load(tmp_path / "missing.npz")
     bad = tmp_path / "other.npz"
     np.savez(bad, x=np.zeros(3))
-    with pytest.raises(sg.InputError, match="other.npz"):
+    with pytest.raises(sg.InputError, match=r"other\.npz"):
         sg.GBuffer.load(bad)
     junk = tmp_path / "junk.npz"
     junk.write_bytes(b"not a zip")
-    with pytest.raises(sg.InputError, match="junk.npz"):
+    with pytest.raises(sg.InputError, match=r"junk\.npz"):
         sg.GBuffer.load(junk)
     with pytest.raises(sg.InputError, match=r"\.png"):
         sg.GBuffer.load(_touch(tmp_path / "x.png"))
     img = pv.ImageData(dimensions=(3, 3, 1))
     img.save(tmp_path / "plain.vti")
-    with pytest.raises(sg.InputError, match="plain.vti"):
+    with pytest.raises(sg.InputError, match=r"plain\.vti"):
         sg.GBuffer.load(tmp_path / "plain.vti")
 
 

@@ -1,4 +1,4 @@
-"""Readers: files (meshes, and later DEM grids, DICOM series, Bezier patches) -> PyVista datasets."""
+"""Readers: mesh files (later DEM grids, DICOM series, Bezier patches) -> PyVista datasets."""
 
 from .mesh import read_mesh
 

@@ -1,0 +1,333 @@
+"""Turn G-buffer channels into images: colour maps, normal and id colouring, PNG, montages.
+
+All functions are vectorised, return new arrays and never modify their inputs. RGB images are
+``(H, W, 3)`` float32 in ``[0, 1]`` unless said otherwise.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from .errors import InputError
+
+__all__ = ["colorize", "ids_to_rgb", "montage", "normals_to_rgb", "to_uint8", "write_png"]
+
+_Colour = Sequence[float]
+_M24 = np.uint64(0xFFFFFF)
+
+
+# ---------------------------------------------------------------------------- checks
+def _background(background: object, name: str = "background") -> np.ndarray:
+    try:
+        bg = np.asarray(background, dtype=np.float64)
+    except (TypeError, ValueError):
+        bg = None
+    if bg is None or bg.shape != (3,) or not np.all((bg >= 0) & (bg <= 1)):
+        raise InputError(f"{name}: expected an RGB triple of floats in [0, 1], got {background!r}")
+    return bg.astype(np.float32)
+
+
+def _array(values: object, name: str, ndim: int, trailing: tuple[int, ...] = ()) -> np.ndarray:
+    a = np.asarray(values)
+    if a.ndim != ndim or a.shape[2:] != trailing or a.size == 0:
+        shape = "(H, W" + "".join(f", {t}" for t in trailing) + ")"
+        raise InputError(f"{name}: expected a non-empty array of shape {shape}, got {a.shape}")
+    return a
+
+
+def _mask(mask: object, shape: tuple[int, ...]) -> np.ndarray | None:
+    if mask is None:
+        return None
+    m = np.asarray(mask)
+    if m.dtype != np.bool_ or m.shape != shape:
+        raise InputError(f"mask: expected a bool array of shape {shape}, got {m.dtype} {m.shape}")
+    return m
+
+
+# ---------------------------------------------------------------------------- channels
+def colorize(
+    values: np.ndarray,
+    *,
+    mask: np.ndarray | None = None,
+    cmap: str | object = "viridis",
+    vmin: float | None = None,
+    vmax: float | None = None,
+    background: _Colour = (1.0, 1.0, 1.0),
+) -> np.ndarray:
+    """Map a scalar image through a Matplotlib colour map.
+
+    Parameters
+    ----------
+    values : (H, W) array_like of real numbers
+        The channel, e.g. ``GBuffer.depth``; NaN marks background.
+    mask : (H, W) bool array, optional
+        Pixels to colour; the rest (and NaN) get ``background``.
+    cmap : str or matplotlib.colors.Colormap, default: "viridis"
+        Colour map or its registered name.
+    vmin, vmax : float, optional
+        Values mapped to ``cmap(0)`` and ``cmap(1)``; values outside are clipped. Default the
+        range of the finite, masked values. A constant image maps to ``cmap(0.5)``.
+    background : RGB triple in [0, 1], default: white
+
+    Returns
+    -------
+    (H, W, 3) float32 ndarray in [0, 1]
+    """
+    import matplotlib
+
+    v = _array(values, "values", 2)
+    if not (np.issubdtype(v.dtype, np.number) or v.dtype == np.bool_) or np.iscomplexobj(v):
+        raise InputError(f"values: expected real numbers, got dtype {v.dtype}")
+    m = _mask(mask, v.shape)
+    bg = _background(background)
+    try:
+        cm = matplotlib.colormaps[cmap] if isinstance(cmap, str) else cmap
+    except KeyError:
+        raise InputError(f"cmap: unknown colour map {cmap!r}") from None
+    if not callable(cm):
+        raise InputError(f"cmap: expected a colour map name or Colormap, got {cmap!r}")
+    v = v.astype(np.float64)
+    valid = np.isfinite(v) if m is None else np.isfinite(v) & m
+    lo, hi = _value_range(v, valid, vmin, vmax)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t = np.clip((v - lo) / (hi - lo), 0.0, 1.0) if hi > lo else np.full(v.shape, 0.5)
+    rgb = np.asarray(cm(np.where(valid, t, 0.0)), dtype=np.float32)[..., :3]
+    rgb[~valid] = bg
+    return rgb
+
+
+def _value_range(
+    v: np.ndarray, valid: np.ndarray, vmin: float | None, vmax: float | None
+) -> tuple[float, float]:
+    for name, x in (("vmin", vmin), ("vmax", vmax)):
+        if x is not None and not np.isfinite(x):
+            raise InputError(f"{name}: expected a finite number, got {x!r}")
+    any_valid = bool(valid.any())
+    lo = float(vmin) if vmin is not None else (float(v[valid].min()) if any_valid else 0.0)
+    hi = float(vmax) if vmax is not None else (float(v[valid].max()) if any_valid else 1.0)
+    if vmin is not None and vmax is not None and lo > hi:
+        raise InputError(f"vmin, vmax: expected vmin <= vmax, got {lo} > {hi}")
+    # A given limit beyond the data's range wins over the default other end.
+    return (lo, max(lo, hi)) if vmin is not None else (min(lo, hi), hi)
+
+
+def normals_to_rgb(
+    normal: np.ndarray,
+    *,
+    mask: np.ndarray | None = None,
+    background: _Colour = (1.0, 1.0, 1.0),
+) -> np.ndarray:
+    """The usual normal-map colouring: components in ``[-1, 1]`` map linearly to ``[0, 1]``.
+
+    Parameters
+    ----------
+    normal : (H, W, 3) array_like
+        Unit normals, e.g. ``GBuffer.normal`` (eye space: a normal facing the viewer,
+        ``(0, 0, 1)``, is ``(0.5, 0.5, 1)``); pixels with a NaN component are background.
+    mask : (H, W) bool array, optional
+        Pixels to colour; the rest get ``background``.
+    background : RGB triple in [0, 1], default: white
+
+    Returns
+    -------
+    (H, W, 3) float32 ndarray in [0, 1]
+    """
+    n = _array(normal, "normal", 3, (3,))
+    if not np.issubdtype(n.dtype, np.floating):
+        raise InputError(f"normal: expected floating-point components, got dtype {n.dtype}")
+    m = _mask(mask, n.shape[:2])
+    bg = _background(background)
+    valid = np.isfinite(n).all(axis=-1)
+    if m is not None:
+        valid &= m
+    with np.errstate(invalid="ignore"):
+        rgb = np.clip((n.astype(np.float32) + 1.0) * 0.5, 0.0, 1.0)
+    rgb[~valid] = bg
+    return rgb
+
+
+def _mix24(x: np.ndarray) -> np.ndarray:
+    """A bijection of 24-bit integers with good avalanche (multiply by odd, xor-shift)."""
+    for mult, shift in ((0x9E3779, 12), (0x85EBCB, 11), (0xC2B2AF, 13)):
+        x = (x * np.uint64(mult)) & _M24
+        x ^= x >> np.uint64(shift)
+    return x
+
+
+def ids_to_rgb(ids: np.ndarray, *, background: _Colour = (1.0, 1.0, 1.0)) -> np.ndarray:
+    """Colour integer labels (object or cell ids) so that neighbouring ids look different.
+
+    Parameters
+    ----------
+    ids : (H, W) integer array_like
+        Labels; negative values (``-1`` in a G-buffer) are background.
+    background : RGB triple in [0, 1], default: white
+
+    Returns
+    -------
+    (H, W, 3) float32 ndarray in [0, 1]
+        The colour of an id is a hash of it: equal ids get equal colours in every image, and
+        ids that differ modulo ``2**24`` get different 8-bit colours (the hash is a bijection
+        of 24-bit integers).
+    """
+    a = _array(ids, "ids", 2)
+    if not np.issubdtype(a.dtype, np.integer):
+        raise InputError(f"ids: expected an integer array, got dtype {a.dtype}")
+    bg = _background(background)
+    valid = a >= 0
+    x = np.where(valid, a, 0).astype(np.uint64)
+    # Fold high bits in (a no-op below 2**24, so the bijection holds there); the offset keeps
+    # id 0, the only object of most scenes, from hashing to black.
+    x = (x ^ (x >> np.uint64(24)) ^ (x >> np.uint64(48))) + np.uint64(0x6A09E6)
+    h = _mix24(x & _M24)
+    channels = [(h >> np.uint64(s)) & np.uint64(0xFF) for s in (16, 8, 0)]
+    rgb = np.stack(channels, axis=-1).astype(np.float32) / np.float32(255.0)
+    rgb[~valid] = bg
+    return rgb
+
+
+# ---------------------------------------------------------------------------- images
+def _image(image: object, name: str = "image") -> np.ndarray:
+    a = np.asarray(image)
+    ok_shape = a.ndim == 2 or (a.ndim == 3 and a.shape[2] in (3, 4))
+    if not ok_shape or a.size == 0:
+        raise InputError(f"{name}: expected shape (H, W), (H, W, 3) or (H, W, 4), got {a.shape}")
+    if a.dtype not in (np.uint8, np.bool_) and not np.issubdtype(a.dtype, np.floating):
+        raise InputError(f"{name}: expected float in [0, 1], uint8 or bool, got dtype {a.dtype}")
+    return a
+
+
+def to_uint8(rgb: np.ndarray) -> np.ndarray:
+    """Convert an image to 8 bits: float ``[0, 1]`` -> ``round(255 x)``; bool -> 0/255.
+
+    Parameters
+    ----------
+    rgb : (H, W), (H, W, 3) or (H, W, 4) array_like
+        Float in ``[0, 1]`` (values outside are clipped), uint8 (copied) or bool.
+
+    Returns
+    -------
+    uint8 ndarray of the same shape
+    """
+    a = _image(rgb, "rgb")
+    if a.dtype == np.uint8:
+        return a.copy()
+    if a.dtype == np.bool_:
+        return np.where(a, np.uint8(255), np.uint8(0))
+    if not np.isfinite(a).all():
+        raise InputError("rgb: expected finite values in [0, 1], got NaN or infinity")
+    return np.rint(np.clip(a, 0.0, 1.0) * 255.0).astype(np.uint8)
+
+
+def write_png(path: str | os.PathLike, image: np.ndarray) -> Path:
+    """Write an image as PNG with Pillow.
+
+    Parameters
+    ----------
+    path : str or path-like
+        Output file; its directory must exist.
+    image : (H, W), (H, W, 3) or (H, W, 4) array_like
+        Float in ``[0, 1]``, uint8 or bool (grey, RGB or RGBA).
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
+    """
+    from PIL import Image
+
+    p = Path(path)
+    if p.suffix.lower() != ".png":
+        raise InputError(f"path: expected a file name ending in .png, got {str(p)!r}")
+    Image.fromarray(to_uint8(image)).save(p, format="PNG")
+    return p
+
+
+def _as_rgb(image: object, name: str) -> np.ndarray:
+    """Any accepted image as (H, W, 3) uint8 (alpha dropped, grey repeated)."""
+    a = to_uint8(_image(image, name))
+    if a.ndim == 2:
+        return np.repeat(a[..., None], 3, axis=2)
+    return a[..., :3]
+
+
+def _fit_text(draw, text: str, font, width: int) -> str:
+    """``text``, shortened with an ellipsis until it fits ``width`` pixels."""
+    if draw.textlength(text, font=font) <= width:
+        return text
+    while text and draw.textlength(text + "…", font=font) > width:
+        text = text[:-1]
+    return text + "…"
+
+
+def montage(
+    images: Sequence[tuple[str, np.ndarray]],
+    *,
+    columns: int | None = None,
+    background: _Colour = (1.0, 1.0, 1.0),
+    padding: int = 4,
+) -> np.ndarray:
+    """Tile titled images into one image, row by row.
+
+    Parameters
+    ----------
+    images : sequence of (str, image)
+        Title and image (any form :func:`write_png` accepts); sizes may differ: every tile is
+        as large as the largest image, which is centred in it.
+    columns : int, optional
+        Tiles per row; default ``ceil(sqrt(len(images)))``.
+    background : RGB triple in [0, 1], default: white
+    padding : int, default: 4
+        Pixels between tiles and around the titles.
+
+    Returns
+    -------
+    (H, W, 3) float32 ndarray in [0, 1]
+        Titles are drawn above each tile in black with Pillow's default font.
+    """
+    from PIL import Image, ImageDraw, ImageFont
+
+    if isinstance(images, (str, bytes)) or not isinstance(images, Sequence) or not images:
+        raise InputError("images: expected a non-empty list of (title, image) pairs")
+    tiles = []
+    for i, item in enumerate(images):
+        if not (isinstance(item, Sequence) and len(item) == 2 and isinstance(item[0], str)):
+            raise InputError(f"images[{i}]: expected a (title, image) pair, got {type(item)}")
+        tiles.append((item[0], _as_rgb(item[1], f"images[{i}]")))
+    n = len(tiles)
+    if columns is None:
+        columns = math.ceil(math.sqrt(n))
+    if isinstance(columns, bool) or not isinstance(columns, (int, np.integer)) or columns < 1:
+        raise InputError(f"columns: expected a positive integer, got {columns!r}")
+    if isinstance(padding, bool) or not isinstance(padding, (int, np.integer)) or padding < 0:
+        raise InputError(f"padding: expected a non-negative integer, got {padding!r}")
+    bg = tuple(int(c) for c in to_uint8(_background(background)[None, None])[0, 0])
+
+    tile_h = max(t.shape[0] for _, t in tiles)
+    tile_w = max(t.shape[1] for _, t in tiles)
+    try:  # Pillow >= 10.1 scales its default (FreeType) font
+        font = ImageFont.load_default(size=max(10, tile_h // 30))
+    except (TypeError, ImportError):
+        font = ImageFont.load_default()
+    canvas_probe = ImageDraw.Draw(Image.new("RGB", (1, 1)))
+    text_h = canvas_probe.textbbox((0, 0), "Ag", font=font)[3]
+    cell_w, cell_h = tile_w + padding, tile_h + text_h + 2 * padding
+    rows = math.ceil(n / columns)
+    cols = min(columns, n)
+    canvas = Image.new("RGB", (cols * cell_w + padding, rows * cell_h + padding), bg)
+    draw = ImageDraw.Draw(canvas)
+    for k, (title, tile) in enumerate(tiles):
+        x0 = padding + (k % columns) * cell_w
+        y0 = padding + (k // columns) * cell_h
+        label = _fit_text(draw, title, font, tile_w)
+        tx = x0 + (tile_w - draw.textlength(label, font=font)) / 2
+        draw.text((tx, y0), label, fill=(0, 0, 0), font=font)
+        oy = y0 + text_h + padding + (tile_h - tile.shape[0]) // 2
+        ox = x0 + (tile_w - tile.shape[1]) // 2
+        canvas.paste(Image.fromarray(tile), (ox, oy))
+    return np.asarray(canvas, dtype=np.float32) / np.float32(255.0)

@@ -1,0 +1,264 @@
+"""``run_demo``: G-buffers of the bundled sample scenes as PNGs, ``.npz`` files and an HTML page.
+
+Two scenes: PyVista's nut (iso view) and the Jacksboro fault DEM seen bird's-eye from the
+south-east. Every channel of each G-buffer is written as a PNG, with a titled montage of all of
+them, and ``index.html`` shows them with a caption, the camera and the timings.
+"""
+
+from __future__ import annotations
+
+import html
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .capture import _check_window_size, capture
+from .compose import colorize, ids_to_rgb, montage, normals_to_rgb, write_png
+from .datasets import load_jacksboro_terrain, load_nut
+from .errors import InputError
+from .gbuffer import GBuffer
+
+__all__ = ["run_demo", "terrain_birdseye_camera"]
+
+# One-line caption of each channel image; scalar channels are captioned where they are made.
+CAPTIONS = {
+    "depth": "depth: linear eye-space distance along the view axis (viridis, dark = near)",
+    "sz": "sz: Saito's perspective depth d²/(w z) in pixels, larger = nearer (viridis)",
+    "normal": "normal: eye-space unit normal, (x, y, z) in [-1, 1] shown as RGB in [0, 1]",
+    "world_x": "world x: world x coordinate of the visible surface point (plasma)",
+    "world_y": "world y: world y coordinate of the visible surface point (plasma)",
+    "world_z": "world z: world z coordinate of the visible surface point (plasma)",
+    "object_id": "object id: index of the dataset in the scene, one colour per id",
+    "cell_id": "cell id: cell of the dataset, one hashed colour per cell",
+    "mask": "mask: coverage, white where the scene covers the pixel",
+}
+
+
+@dataclass
+class _Scene:
+    name: str
+    title: str
+    dataset: object
+    camera: object = None
+    scalars: tuple[str, ...] = ()
+    # Filled in by _write_scene, read by _write_index.
+    images: list[tuple[str, Path]] = field(default_factory=list)
+    files: list[Path] = field(default_factory=list)
+    npz: Path | None = None
+    timings: dict[str, float] = field(default_factory=dict)
+    gbuffer: GBuffer | None = None
+
+
+def terrain_birdseye_camera(
+    bounds: Sequence[float],
+    *,
+    azimuth: float = 135.0,
+    elevation: float = 35.0,
+    view_angle: float = 30.0,
+    aspect: float = 4 / 3,
+    margin: float = 0.05,
+) -> tuple[tuple[float, ...], tuple[float, ...], tuple[float, float, float]]:
+    """A perspective camera looking down at the centre of ``bounds`` from a compass direction.
+
+    Parameters
+    ----------
+    bounds : (xmin, xmax, ymin, ymax, zmin, zmax)
+        Of the surface, with +x east, +y north and +z up (as ``pyvista.DataSet.bounds``).
+    azimuth : float, default: 135.0
+        Compass direction of the eye seen from the centre, in degrees clockwise from north
+        (GDAL's convention); 135 is south-east.
+    elevation : float, default: 35.0
+        Angle of the line of sight above the horizontal, in degrees (0 < elevation < 90).
+    view_angle : float, default: 30.0
+        The camera's vertical view angle (VTK's default), which the distance is fitted to.
+    aspect : float, default: 4/3
+        Width / height of the image.
+    margin : float, default: 0.05
+        Empty border, as a fraction of the image's half width and half height.
+
+    Returns
+    -------
+    position, focal_point, view_up : tuple of float
+        As accepted by :func:`sciviz_gbuf.capture`'s ``camera``. The eye is as close as it can
+        be with all eight corners of ``bounds`` in view.
+    """
+    if not 0.0 < elevation < 90.0:
+        raise InputError(f"elevation: expected degrees in (0, 90), got {elevation!r}")
+    lo = np.asarray(bounds[0::2], dtype=np.float64)
+    hi = np.asarray(bounds[1::2], dtype=np.float64)
+    centre = (lo + hi) / 2
+    az, el = np.radians(azimuth), np.radians(elevation)
+    to_eye = np.array([np.sin(az) * np.cos(el), np.cos(az) * np.cos(el), np.sin(el)])
+    right = np.cross(-to_eye, (0.0, 0.0, 1.0))
+    right /= np.linalg.norm(right)
+    up = np.cross(right, -to_eye)
+    corners = np.array(np.meshgrid(*np.stack([lo, hi], axis=1))).reshape(3, -1).T - centre
+    tan_v = np.tan(np.radians(view_angle) / 2) * (1.0 - margin)
+    tan_h = tan_v * aspect
+    # A corner at lateral offset r and height t towards the eye is in view once the eye is
+    # farther than t + |r| / tan(half field of view) from the focal plane.
+    toward = corners @ to_eye
+    distance = max(
+        np.max(toward + np.abs(corners @ right) / tan_h),
+        np.max(toward + np.abs(corners @ up) / tan_v),
+    )
+    position = centre + distance * to_eye
+    return tuple(position.tolist()), tuple(centre.tolist()), (0.0, 0.0, 1.0)
+
+
+def _scenes(aspect: float) -> list[_Scene]:
+    terrain = load_jacksboro_terrain(vert_exag=2.0)
+    return [
+        _Scene("nut", "PyVista nut, iso view", load_nut()),
+        _Scene(
+            "terrain",
+            "Jacksboro fault DEM, bird's-eye view from the south-east (vertical exaggeration 2)",
+            terrain,
+            camera=terrain_birdseye_camera(terrain.bounds, aspect=aspect),
+            scalars=("elevation",),
+        ),
+    ]
+
+
+def _channel_images(g: GBuffer) -> list[tuple[str, str, np.ndarray]]:
+    """``(key, caption, image)`` of every channel of ``g``."""
+    out = [
+        ("depth", CAPTIONS["depth"], colorize(g.depth)),
+        ("sz", CAPTIONS["sz"], colorize(g.sz)),
+        ("normal", CAPTIONS["normal"], normals_to_rgb(g.normal)),
+    ]
+    for i, axis in enumerate("xyz"):
+        key = f"world_{axis}"
+        out.append((key, CAPTIONS[key], colorize(g.world[..., i], cmap="plasma")))
+    out += [
+        ("object_id", CAPTIONS["object_id"], ids_to_rgb(g.object_id)),
+        ("cell_id", CAPTIONS["cell_id"], ids_to_rgb(g.cell_id)),
+        ("mask", CAPTIONS["mask"], g.mask),
+    ]
+    for name, values in g.scalars.items():
+        if values.ndim == 2:  # multi-component arrays have no single colour map
+            caption = f"scalars {name}: the point array {name!r} interpolated (terrain)"
+            out.append((f"scalars_{name}", caption, colorize(values, cmap="terrain")))
+    return out
+
+
+def _write_scene(
+    scene: _Scene, outdir: Path, window_size: tuple[int, int], progress_bar: bool
+) -> None:
+    t0 = time.perf_counter()
+    g = capture(
+        scene.dataset,
+        window_size=window_size,
+        camera=scene.camera,
+        scalars=scene.scalars,
+        progress_bar=progress_bar,
+    )
+    t1 = time.perf_counter()
+    images = _channel_images(g)
+    for key, caption, image in images:
+        path = write_png(outdir / f"{scene.name}_{key}.png", image)
+        scene.images.append((caption, path))
+    titles = [(caption.split(":")[0], image) for _, caption, image in images]
+    path = write_png(outdir / f"{scene.name}_montage.png", montage(titles, columns=4))
+    scene.images.append(("montage: all channels above, titled", path))
+    t2 = time.perf_counter()
+    scene.files = [p for _, p in scene.images]
+    scene.npz = g.save(outdir / f"{scene.name}_gbuffer.npz")
+    scene.files.append(scene.npz)
+    scene.timings = {
+        "capture": t1 - t0,
+        "PNG images": t2 - t1,
+        "G-buffer .npz": time.perf_counter() - t2,
+    }
+    scene.gbuffer = g
+
+
+def _camera_text(g: GBuffer) -> list[str]:
+    c = g.camera
+
+    def vec(v: tuple[float, ...]) -> str:
+        return "(" + ", ".join(f"{x:.6g}" for x in v) + ")"
+
+    angle = (
+        f"parallel scale {c.parallel_scale:.6g}"
+        if c.parallel_projection
+        else f"view angle {c.view_angle:.6g}°"
+    )
+    return [
+        f"position {vec(c.position)}, focal point {vec(c.focal_point)}, view up {vec(c.view_up)}",
+        f"{angle}, clipping range {vec(c.clipping_range)}, "
+        f"window {c.window_size[0]}x{c.window_size[1]} px, "
+        f"pixel size at the focal plane {c.pixel_size:.6g}",
+    ]
+
+
+_STYLE = (
+    "body{font-family:sans-serif;margin:2em;max-width:110em}"
+    "figure{display:inline-block;margin:0 1em 1em 0;vertical-align:top}"
+    "figcaption{font-size:90%;max-width:40em}img{border:1px solid #ccc}"
+)
+
+
+def _scene_html(scene: _Scene) -> str:
+    assert scene.gbuffer is not None and scene.npz is not None
+    esc = html.escape
+    npz = scene.npz.name
+    parts = [f"<h2>{esc(scene.title)}</h2>", f"<p>{esc(repr(scene.gbuffer))}</p>", "<p>Camera: "]
+    parts.append("<br>".join(esc(line) for line in _camera_text(scene.gbuffer)) + "</p>")
+    timing = ", ".join(f"{k} {v:.2f} s" for k, v in scene.timings.items())
+    parts.append(f"<p>Timings: {esc(timing)}</p>")
+    parts.append(f'<p>G-buffer: <a href="{esc(npz)}">{esc(npz)}</a> (GBuffer.load)</p>')
+    for caption, path in scene.images:
+        parts.append(
+            f'<figure><figcaption>{esc(caption)}</figcaption><img src="{esc(path.name)}" '
+            f'alt="{esc(caption)}"></figure>'
+        )
+    return "\n".join(parts)
+
+
+def _write_index(scenes: list[_Scene], outdir: Path) -> Path:
+    body = "\n".join(_scene_html(s) for s in scenes)
+    page = (
+        '<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
+        f"<title>sciviz_gbuf demo</title><style>{_STYLE}</style></head><body>\n"
+        "<h1>sciviz_gbuf demo: G-buffers of bundled sample data</h1>\n"
+        f"{body}\n</body></html>\n"
+    )
+    path = outdir / "index.html"
+    path.write_text(page, encoding="utf-8")
+    return path
+
+
+def run_demo(
+    outdir: str | Path = "sciviz_gbuf_demo",
+    *,
+    window_size: tuple[int, int] = (800, 600),
+    progress_bar: bool = False,
+) -> list[Path]:
+    """Capture the sample scenes and write their channels, G-buffers and a gallery page.
+
+    Parameters
+    ----------
+    outdir : str or path-like, default: "sciviz_gbuf_demo"
+        Directory to write into (created if missing); nothing is written elsewhere.
+    window_size : (int, int), default: (800, 600)
+        ``(width, height)`` of the captures and of each channel image.
+    progress_bar : bool, default: False
+        Show a progress bar for each capture.
+
+    Returns
+    -------
+    list of pathlib.Path
+        Every file written: per scene one PNG per channel, a montage PNG and the G-buffer
+        ``.npz``; finally ``index.html``.
+    """
+    width, height = _check_window_size(window_size)
+    out = Path(outdir)
+    out.mkdir(parents=True, exist_ok=True)
+    scenes = _scenes(width / height)
+    for scene in scenes:
+        _write_scene(scene, out, (width, height), progress_bar)
+    return [p for s in scenes for p in s.files] + [_write_index(scenes, out)]

@@ -1,0 +1,307 @@
+"""compose (channel images, PNG, montage), datasets (nut, Jacksboro DEM in metres) and run_demo."""
+
+from __future__ import annotations
+
+import re
+
+import matplotlib
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+from PIL import Image
+
+from sciviz_gbuf import GBuffer, InputError
+from sciviz_gbuf.compose import (
+    colorize,
+    ids_to_rgb,
+    montage,
+    normals_to_rgb,
+    to_uint8,
+    write_png,
+)
+from sciviz_gbuf.datasets import load_jacksboro_terrain, load_nut
+from sciviz_gbuf.demo import run_demo, terrain_birdseye_camera
+
+WHITE = np.ones(3, dtype=np.float32)
+
+
+# ---------------------------------------------------------------------------- colorize
+def test_colorize_background_and_limits():
+    v = np.array([[0.0, 1.0, 2.0], [np.nan, 0.5, 3.0]])
+    mask = np.array([[True, True, True], [True, True, False]])
+    before = v.copy()
+    rgb = colorize(v, mask=mask, cmap="viridis", background=(1.0, 0.0, 0.0))
+    np.testing.assert_array_equal(v, before)  # input untouched
+    assert rgb.shape == (2, 3, 3)
+    assert rgb.dtype == np.float32
+    np.testing.assert_array_equal(rgb[1, 0], [1, 0, 0])  # NaN
+    np.testing.assert_array_equal(rgb[1, 2], [1, 0, 0])  # masked out
+    cmap = matplotlib.colormaps["viridis"]
+    # the default range is that of the finite, masked values: 0 .. 2 (3.0 is masked out)
+    np.testing.assert_allclose(rgb[0, 0], cmap(0.0)[:3], atol=1e-6)
+    np.testing.assert_allclose(rgb[0, 2], cmap(1.0)[:3], atol=1e-6)
+
+
+def test_colorize_explicit_range_clips():
+    v = np.array([[-5.0, 10.0, 20.0, 100.0]])
+    rgb = colorize(v, vmin=10.0, vmax=20.0, cmap="magma")
+    cmap = matplotlib.colormaps["magma"]
+    for j, t in enumerate([0.0, 0.0, 1.0, 1.0]):
+        np.testing.assert_allclose(rgb[0, j], cmap(t)[:3], atol=1e-6)
+
+
+def test_colorize_all_background_and_constant():
+    assert (colorize(np.full((4, 5), np.nan)) == WHITE).all()
+    const = colorize(np.full((2, 2), 7.0))
+    np.testing.assert_allclose(const[0, 0], matplotlib.colormaps["viridis"](0.5)[:3], atol=1e-6)
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    arrays(
+        np.float64,
+        st.tuples(st.integers(1, 8), st.integers(1, 8)),
+        elements=st.floats(-1e6, 1e6) | st.just(np.nan),
+    )
+)
+def test_colorize_property(v):
+    rgb = colorize(v)
+    assert rgb.shape == (*v.shape, 3)
+    assert np.isfinite(rgb).all()
+    assert ((rgb >= 0) & (rgb <= 1)).all()
+    assert (rgb[np.isnan(v)] == WHITE).all()
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "word"),
+    [
+        ({"values": np.zeros((2, 2, 2))}, "values"),
+        ({"values": np.zeros((2, 2)), "mask": np.ones((3, 2), bool)}, "mask"),
+        ({"values": np.zeros((2, 2)), "mask": np.ones((2, 2))}, "mask"),
+        ({"values": np.zeros((2, 2)), "cmap": "no_such_map"}, "cmap"),
+        ({"values": np.zeros((2, 2)), "vmin": 2.0, "vmax": 1.0}, "vmin"),
+        ({"values": np.zeros((2, 2)), "vmin": np.nan}, "vmin"),
+        ({"values": np.zeros((2, 2)), "background": (1, 1)}, "background"),
+        ({"values": np.zeros((2, 2)), "background": (2, 0, 0)}, "background"),
+        ({"values": np.array([["a", "b"]])}, "values"),
+    ],
+)
+def test_colorize_rejects(kwargs, word):
+    values = kwargs.pop("values")
+    with pytest.raises(InputError, match=word):
+        colorize(values, **kwargs)
+
+
+# ---------------------------------------------------------------------------- normals, ids
+def test_normals_to_rgb():
+    n = np.array([[[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [np.nan, np.nan, np.nan]]], np.float32)
+    before = n.copy()
+    rgb = normals_to_rgb(n, background=(0.0, 0.0, 0.0))
+    np.testing.assert_array_equal(n, before)
+    np.testing.assert_allclose(rgb[0, 0], [0.5, 0.5, 1.0])
+    np.testing.assert_allclose(rgb[0, 1], [0.0, 0.5, 0.5])
+    np.testing.assert_array_equal(rgb[0, 2], [0, 0, 0])
+    with pytest.raises(InputError, match="normal"):
+        normals_to_rgb(np.zeros((2, 2, 2)))
+    with pytest.raises(InputError, match="normal"):
+        normals_to_rgb(np.zeros((2, 2, 3), dtype=np.int32))
+
+
+def test_ids_to_rgb_distinct_and_stable():
+    ids = np.arange(1000, dtype=np.int64).reshape(20, 50)
+    rgb = ids_to_rgb(ids)
+    triples = to_uint8(rgb).reshape(-1, 3)
+    assert len(np.unique(triples, axis=0)) == 1000
+    # equal ids give equal colours, whatever the array they are in
+    again = ids_to_rgb(np.array([[999, 0], [999, -1]], dtype=np.int32))
+    np.testing.assert_array_equal(again[0, 0], rgb[-1, -1])
+    np.testing.assert_array_equal(again[1, 0], rgb[-1, -1])
+    np.testing.assert_array_equal(again[0, 1], rgb[0, 0])
+    np.testing.assert_array_equal(again[1, 1], WHITE)
+    assert not (rgb[0, 0] == WHITE).all()  # id 0 (one-object scenes) is not background
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(0, 2**24 - 1), st.integers(0, 2**24 - 1))
+def test_ids_to_rgb_injective_below_2_24(a, b):
+    ca, cb = (to_uint8(ids_to_rgb(np.array([[x]]))) for x in (a, b))
+    assert (a == b) == bool((ca == cb).all())
+
+
+def test_ids_to_rgb_rejects_floats():
+    with pytest.raises(InputError, match="ids"):
+        ids_to_rgb(np.zeros((2, 2)))
+
+
+# ---------------------------------------------------------------------------- PNG, montage
+@pytest.mark.parametrize(
+    "image",
+    [
+        np.linspace(0, 1, 12, dtype=np.float32).reshape(3, 4),
+        np.random.default_rng(0).random((5, 7, 3)),
+        np.random.default_rng(1).integers(0, 256, (6, 4, 4), dtype=np.uint8),
+        np.eye(4, dtype=bool),
+    ],
+)
+def test_write_png_round_trip(tmp_path, image):
+    before = image.copy()
+    path = write_png(tmp_path / "x.png", image)
+    np.testing.assert_array_equal(image, before)
+    with Image.open(path) as im:
+        assert im.format == "PNG"
+        back = np.asarray(im)
+    np.testing.assert_array_equal(back, to_uint8(image))
+
+
+@pytest.mark.parametrize(
+    ("image", "name"),
+    [
+        (np.zeros((2, 2, 2)), "x.png"),
+        (np.zeros((2, 2), dtype=np.int16), "x.png"),
+        (np.zeros((2, 2)), "x.jpg"),
+        (np.full((2, 2), np.nan), "x.png"),
+    ],
+)
+def test_write_png_rejects(tmp_path, image, name):
+    with pytest.raises(InputError):
+        write_png(tmp_path / name, image)
+
+
+def test_montage_layout_and_titles():
+    a = np.zeros((30, 40, 3), np.float32)
+    b = np.ones((20, 20), np.float32)
+    out = montage([("black", a), ("white", b), ("mask", np.eye(10, dtype=bool))], columns=2)
+    assert out.dtype == np.float32
+    assert out.shape[2] == 3
+    assert out.shape[0] > 2 * 30 and out.shape[1] > 2 * 40
+    assert ((out >= 0) & (out <= 1)).all()
+    # the black tile and some dark title text are in there
+    assert (out.min(axis=2) == 0).sum() >= 30 * 40
+    with pytest.raises(InputError, match="images"):
+        montage([])
+    with pytest.raises(InputError, match="images"):
+        montage([("t", np.zeros((2, 2, 2)))])
+    with pytest.raises(InputError, match="columns"):
+        montage([("t", a)], columns=0)
+
+
+# ---------------------------------------------------------------------------- datasets
+@pytest.fixture(scope="module")
+def dem():
+    from matplotlib import cbook
+
+    data = cbook.get_sample_data("jacksboro_fault_dem.npz")
+    if not hasattr(data, "files"):
+        data = np.load(data)
+    with data:
+        return {k: np.asarray(data[k]) for k in data.files}
+
+
+def test_load_nut():
+    nut = load_nut()
+    assert nut.n_points > 0 and nut.n_cells > 0
+
+
+def test_jacksboro_terrain_north_up_and_metres(dem):
+    raw = dem["elevation"]
+    rows, cols = raw.shape
+    grid = load_jacksboro_terrain()
+    assert grid.dimensions == (cols, rows, 1)
+    elev = np.asarray(grid.point_data["elevation"])
+    assert elev.dtype == np.float32
+    pts = np.asarray(grid.points)
+    # the northernmost row (row 0 of the file, whose ymin is the north edge) is at max y
+    assert dem["ymin"] > dem["ymax"]
+    north = np.isclose(pts[:, 1], pts[:, 1].max())
+    np.testing.assert_array_equal(elev[north][np.argsort(pts[north, 0])], raw[0])
+    south = np.isclose(pts[:, 1], pts[:, 1].min())
+    np.testing.assert_array_equal(elev[south][np.argsort(pts[south, 0])], raw[-1])
+    # and the west edge is at min x
+    west = np.isclose(pts[:, 0], pts[:, 0].min())
+    np.testing.assert_array_equal(elev[west][np.argsort(-pts[west, 1])], raw[:, 0])
+    # the whole array, and z, are the raw elevations
+    np.testing.assert_array_equal(np.sort(elev), np.sort(raw.ravel().astype(np.float32)))
+    np.testing.assert_array_equal(pts[:, 2], elev)
+    # metres, not degrees
+    lat = np.radians((dem["ymin"] + dem["ymax"]) / 2)
+    width = (dem["xmax"] - dem["xmin"]) * 111320 * np.cos(lat)
+    height = (dem["ymin"] - dem["ymax"]) * 110574
+    xmin, xmax, ymin, ymax, zmin, zmax = grid.bounds
+    assert xmax - xmin == pytest.approx(width, rel=0.01)
+    assert ymax - ymin == pytest.approx(height, rel=0.01)
+    assert (zmin, zmax) == (raw.min(), raw.max())
+
+
+def test_jacksboro_vert_exag():
+    g = load_jacksboro_terrain(vert_exag=2.5)
+    np.testing.assert_allclose(g.points[:, 2], 2.5 * g.point_data["elevation"].astype(float))
+    for bad in (0.0, -1.0, np.nan):
+        with pytest.raises(InputError, match="vert_exag"):
+            load_jacksboro_terrain(vert_exag=bad)
+
+
+def test_birdseye_camera_is_south_east_and_above():
+    bounds = (0.0, 1000.0, 0.0, 2000.0, 0.0, 100.0)
+    pos, foc, up = terrain_birdseye_camera(bounds)
+    assert foc == pytest.approx((500.0, 1000.0, 50.0))
+    d = np.subtract(pos, foc)
+    assert d[0] > 0 and d[1] < 0 and d[2] > 0
+    assert d[0] == pytest.approx(-d[1])
+    assert np.degrees(np.arctan2(d[2], np.hypot(d[0], d[1]))) == pytest.approx(35.0)
+    assert up == (0.0, 0.0, 1.0)
+
+
+# ---------------------------------------------------------------------------- run_demo
+WINDOW = (160, 120)
+
+
+@pytest.fixture(scope="module")
+def demo(tmp_path_factory):
+    outdir = tmp_path_factory.mktemp("demo")
+    return outdir, run_demo(outdir, window_size=WINDOW)
+
+
+def test_run_demo_files(demo):
+    outdir, files = demo
+    assert files[-1] == outdir / "index.html"
+    assert sorted(files) == sorted(outdir.iterdir())  # nothing written beside them
+    pngs = [p for p in files if p.suffix == ".png"]
+    assert len(pngs) == 2 * 10 + 1  # 9 channels + montage per scene, + terrain elevation
+    for p in files:
+        assert p.is_file() and p.stat().st_size > 0
+    for p in pngs:
+        with Image.open(p) as im:
+            assert im.format == "PNG"
+            if p.stem.endswith("montage"):
+                assert im.size[0] > WINDOW[0] and im.size[1] > WINDOW[1]
+            else:
+                assert im.size == WINDOW
+    page = (outdir / "index.html").read_text(encoding="utf-8")
+    referenced = set(re.findall(r'src="([^"]+)"', page))
+    assert referenced == {p.name for p in pngs}
+    for npz in (p for p in files if p.suffix == ".npz"):
+        assert f'href="{npz.name}"' in page
+
+
+def test_run_demo_terrain_view(demo):
+    outdir, _ = demo
+    g = GBuffer.load(outdir / "terrain_gbuffer.npz")
+    assert g.shape == (WINDOW[1], WINDOW[0])
+    assert "elevation" in g.scalars
+    # framed: the terrain fills the view but does not touch the image border
+    border = np.concatenate([g.mask[0], g.mask[-1], g.mask[:, 0], g.mask[:, -1]])
+    assert not border.any() and g.mask.mean() > 0.2
+    # north away from the viewer: northing grows towards the top rows, and so does depth
+    rows = np.nonzero(g.mask)[0]
+    assert np.corrcoef(rows, g.world[..., 1][g.mask])[0, 1] < -0.5
+    assert np.corrcoef(rows, g.depth[g.mask])[0, 1] < -0.5
+    elev = g.scalars["elevation"][g.mask]
+    np.testing.assert_allclose(g.world[..., 2][g.mask], 2.0 * elev, rtol=1e-4)
+
+
+def test_run_demo_rejects_bad_window(tmp_path):
+    with pytest.raises(InputError, match="window_size"):
+        run_demo(tmp_path / "out", window_size=(0, 10))
+    assert not (tmp_path / "out").exists()
