@@ -292,10 +292,15 @@ def capture(
             info.parallel_projection,
         )
         mask = tid >= 0
-        safe = np.where(mask, tid, 0)
-        object_id = np.where(mask, tri_obj[safe], -1).astype(np.int32)
-        cell_id = np.where(mask, tri_cell[safe], -1).astype(np.int64)
-        sz = info.sz_from_depth(depth)
+        object_id, cell_id, sz = _kernels.labels_and_sz(
+            tid,
+            depth,
+            tri_obj,
+            tri_cell,
+            info.distance,
+            info.pixel_size,
+            info.parallel_projection,
+        )
         bar.step("attributes")
 
         uv = None
