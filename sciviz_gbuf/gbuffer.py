@@ -109,10 +109,12 @@ class GBuffer:
         return (self.normal.astype(np.float64) @ rot).astype(np.float32)
 
     def downsample(self, image: np.ndarray) -> np.ndarray:
-        """Box-filter an image of this buffer's size to the output size (antialiasing).
+        """Reduce an image of this buffer's size to the output size (antialiasing).
 
-        NaN samples are left out of each ``k x k`` average; a pixel whose samples are all NaN
-        stays NaN.
+        Float and bool images are box-filtered: each output pixel is the mean of its
+        ``k x k`` samples, NaN samples left out (all-NaN stays NaN); a bool mask becomes
+        fractional coverage. Integer images (ids) cannot be averaged: the sample nearest the
+        block centre is taken.
         """
         k = self.supersample
         img = np.asarray(image)
@@ -122,6 +124,8 @@ class GBuffer:
             )
         if k == 1:
             return img.copy()
+        if np.issubdtype(img.dtype, np.integer):
+            return img[k // 2 :: k, k // 2 :: k].copy()
         h, w = self.output_shape
         blocks = img[: h * k, : w * k].reshape(h, k, w, k, *img.shape[2:]).astype(np.float32)
         if not np.isnan(blocks).any():

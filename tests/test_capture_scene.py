@@ -143,6 +143,12 @@ def test_supersample_shapes_and_downsample():
     # partially covered output pixels exist at the silhouette: antialiasing information kept
     assert ((cov > 0) & (cov < 1)).sum() > 20
     assert np.array_equal(np.isnan(g.downsample(g.depth)), cov == 0)
+    # ids are sampled, not averaged
+    ids = g.downsample(g.cell_id)
+    assert ids.dtype == np.int64 and ids.shape == (40, 50)
+    assert np.array_equal(ids, g.cell_id[1::3, 1::3])
+    with pytest.raises(sg.InputError, match="expected shape"):
+        g.downsample(np.zeros((40, 50)))
 
 
 def test_plotter_scene_uses_actors_transforms_and_camera_without_disturbing_it():
