@@ -241,8 +241,18 @@ def _fmt(v: float | None, digits: int = 3) -> str:
 
 
 COLUMNS = (
-    "mesh", "triangles", "normals", "size", "capture_s", "plain_s", "ratio",
-    "prep_s", "vtkNormals_s", "render_s", "resolve_s", "other_s",
+    "mesh",
+    "triangles",
+    "normals",
+    "size",
+    "capture_s",
+    "plain_s",
+    "ratio",
+    "prep_s",
+    "vtkNormals_s",
+    "render_s",
+    "resolve_s",
+    "other_s",
 )
 
 
@@ -402,9 +412,17 @@ def main(argv: list[str] | None = None) -> int:
             stage_keys = [*_PATCHES, "total"]
             writer.writerow(
                 [
-                    "mesh", "triangles", "normals_precomputed", "size", "repeats",
-                    "capture_s", "plain_s", "ratio", *(f"stage_{k}_s" for k in stage_keys),
-                    "capture_runs_s", "plain_runs_s",
+                    "mesh",
+                    "triangles",
+                    "normals_precomputed",
+                    "size",
+                    "repeats",
+                    "capture_s",
+                    "plain_s",
+                    "ratio",
+                    *(f"stage_{k}_s" for k in stage_keys),
+                    "capture_runs_s",
+                    "plain_runs_s",
                 ]
             )
             for r in rows:
@@ -413,8 +431,14 @@ def main(argv: list[str] | None = None) -> int:
                 stage_vals = [r.median_stage(k) for k in stage_keys]
                 writer.writerow(
                     [
-                        f"ParametricRandomHills {r.mesh}", r.n_triangles, r.normals, r.size,
-                        repeats, f"{cap:.5f}", f"{plain:.5f}", f"{cap / plain:.4f}",
+                        f"ParametricRandomHills {r.mesh}",
+                        r.n_triangles,
+                        r.normals,
+                        r.size,
+                        repeats,
+                        f"{cap:.5f}",
+                        f"{plain:.5f}",
+                        f"{cap / plain:.4f}",
                         *("" if v is None else f"{v:.5f}" for v in stage_vals),
                         " ".join(f"{v:.5f}" for v in r.capture),
                         " ".join(f"{v:.5f}" for v in r.plain),

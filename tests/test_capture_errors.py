@@ -108,8 +108,10 @@ def test_any_window_size_gives_consistent_buffers(w, h, parallel, view):
         assert (g.depth[m] > 0).all()
         # on the coarse (16-segment) sphere: within its facets' sagitta of the radius
         r = np.linalg.norm(g.world[m], axis=-1)
-        # (a silhouette pixel may sit a sub-pixel snap beyond its facet, slightly outside)
-        assert (r <= 0.5 * (1 + 1e-4)).all() and (r >= 0.5 * np.cos(np.pi / 15) ** 2).all()
+        # A pixel centre the rasteriser gives to a facet may lie a vertex snap (a fraction of
+        # a pixel) outside it: allow a quarter of the pixel footprint beyond the sphere.
+        foot = g.camera.pixel_size * (g.depth[m] / g.camera.distance if not parallel else 1.0)
+        assert (r <= 0.5 + 0.25 * foot).all() and (r >= 0.5 * np.cos(np.pi / 15) ** 2).all()
 
 
 @settings(max_examples=40, deadline=None)
