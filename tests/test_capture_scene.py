@@ -225,3 +225,42 @@ def test_named_views_fit_the_data(view):
     g = sg.capture(sphere, window_size=(80, 60), camera=view)
     assert 0.1 < g.mask.mean() < 0.9
     assert not g.mask[0].any() and not g.mask[-1].any()  # fitted, not cropped
+
+
+def test_parallel_eye_inside_the_data_is_moved_back_not_clipping():
+    sphere, _ = _two_objects()
+    # an orthographic eye at the sphere's centre: moving it back changes nothing in the image
+    g = sg.capture(
+        sphere,
+        window_size=(80, 80),
+        camera=[(0, 0, 0), (0, 0, -1), (0, 1, 0)],
+        parallel_projection=True,
+    )
+    ref = sg.capture(
+        sphere,
+        window_size=(80, 80),
+        camera=[(0, 0, 10), (0, 0, 9), (0, 1, 0)],
+        parallel_projection=True,
+    )
+    assert g.mask.sum() > 1000
+    assert np.array_equal(g.mask, ref.mask)
+    assert np.allclose(g.world, ref.world, equal_nan=True, atol=1e-5)
+    # the seen half is the one facing +z (the front of the sphere for this eye)
+    assert (g.world[g.mask][:, 2] >= -1e-6).all()
+
+
+def test_perspective_eye_inside_a_sphere_sees_the_inside():
+    sphere, _ = _two_objects()
+    g = sg.capture(sphere, window_size=(64, 48), camera=[(0, 0, 0), (0, 0, -1), (0, 1, 0)])
+    assert g.mask.all()
+    # every point seen is on the sphere, ahead of the eye, and its normal faces the eye
+    assert np.allclose(np.linalg.norm(g.world, axis=-1), 1.0, atol=2e-3)
+    assert (g.world[..., 2] < 0).all()
+    assert (g.normal[..., 2] > 0.9).all()
+
+
+def test_progress_bar_runs(capsys):
+    sphere, _ = _two_objects()
+    g = sg.capture(sphere, window_size=(32, 32), progress_bar=True)
+    assert g.mask.any()
+    assert "capture" in capsys.readouterr().err
