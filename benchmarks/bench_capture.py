@@ -10,6 +10,8 @@ What is compared, per mesh and window size (n x n):
 
 * ``capture``: ``sciviz_gbuf.capture(mesh, window_size=(n, n))`` with all its channels, warm
   (the numba kernels were compiled by an untimed first call);
+* ``valuepass``: the alternative design, six ``vtkValuePass`` float passes (world x/y/z, normal
+  x/y/z) in one render, read back (fewer channels than ``capture``: no depth, sz, ids);
 * ``plain``: ``pl = pv.Plotter(off_screen=True, window_size=(n, n)); pl.add_mesh(mesh);
   pl.screenshot(); pl.close()``, PyVista's default theme and default (iso) camera.
 
@@ -87,6 +89,7 @@ class Row:
     size: int
     capture: list[float] = field(default_factory=list)
     plain: list[float] = field(default_factory=list)
+    valuepass: list[float] = field(default_factory=list)
     stages: list[dict[str, float]] = field(default_factory=list)
 
     def median_stage(self, key: str) -> float | None:
@@ -104,6 +107,73 @@ def run_capture(mesh: pv.PolyData, n: int) -> float:
     gbuf = sciviz_gbuf.capture(mesh, window_size=(n, n))
     dt = time.perf_counter() - t0
     del gbuf
+    return dt
+
+
+def run_valuepass(mesh: pv.PolyData, n: int) -> float:
+    """Seconds for the alternative design: float buffers straight from VTK's ``vtkValuePass``.
+
+    Six passes (world x/y/z and normal x/y/z as point arrays) in one ``vtkSequencePass``, one
+    ``Render()``, then every float image read back: the channels ``capture`` gets from its single
+    id render. Normals are computed first when the mesh lacks them, as ``capture`` does.
+    """
+    from vtkmodules.vtkRenderingCore import (
+        VTK_SCALAR_MODE_USE_POINT_FIELD_DATA,
+        vtkActor,
+        vtkPolyDataMapper,
+        vtkRenderer,
+    )
+    from vtkmodules.vtkRenderingOpenGL2 import (
+        vtkCameraPass,
+        vtkRenderPassCollection,
+        vtkSequencePass,
+        vtkValuePass,
+    )
+
+    from sciviz_gbuf._render import new_render_window
+
+    gc.collect()
+    t0 = time.perf_counter()
+    surf = mesh if "Normals" in mesh.point_data else mesh.compute_normals(split_vertices=True)
+    data = pv.PolyData(surf.points, faces=surf.faces)
+    pts = np.asarray(surf.points, dtype=np.float32)
+    nrm = np.asarray(surf.point_data["Normals"], dtype=np.float32)
+    names = []
+    for k, axis in enumerate("xyz"):
+        data.point_data[f"w{axis}"] = pts[:, k]
+        data.point_data[f"n{axis}"] = nrm[:, k]
+        names += [f"w{axis}", f"n{axis}"]
+    mapper = vtkPolyDataMapper()
+    mapper.SetInputData(data)
+    actor = vtkActor()
+    actor.SetMapper(mapper)
+    ren = vtkRenderer()
+    ren.AddActor(actor)
+    passes = vtkRenderPassCollection()
+    value_passes = []
+    for name in names:
+        vp = vtkValuePass()
+        vp.SetInputArrayToProcess(VTK_SCALAR_MODE_USE_POINT_FIELD_DATA, name)
+        vp.SetInputComponentToProcess(0)
+        passes.AddItem(vp)
+        value_passes.append(vp)
+    seq = vtkSequencePass()
+    seq.SetPasses(passes)
+    cam_pass = vtkCameraPass()
+    cam_pass.SetDelegatePass(seq)
+    ren.SetPass(cam_pass)
+    win = new_render_window()
+    win.AddRenderer(ren)
+    win.SetSize(n, n)
+    ren.GetActiveCamera().SetPosition(1, 1, 1)
+    ren.ResetCamera()
+    win.Render()
+    images = [np.array(pv.convert_array(vp.GetFloatImageDataArray(ren))) for vp in value_passes]
+    dt = time.perf_counter() - t0
+    if not all(np.isfinite(im).any() for im in images):
+        raise RuntimeError("vtkValuePass produced an empty float image")
+    win.Finalize()
+    del images
     return dt
 
 
@@ -248,6 +318,7 @@ COLUMNS = (
     "capture_s",
     "plain_s",
     "ratio",
+    "valuepass_s",
     "prep_s",
     "vtkNormals_s",
     "render_s",
@@ -277,6 +348,7 @@ def row_values(row: Row) -> dict[str, str]:
         "capture_s": _fmt(cap),
         "plain_s": _fmt(plain),
         "ratio": f"{cap / plain:.2f}x",
+        "valuepass_s": _fmt(statistics.median(row.valuepass)) if row.valuepass else "-",
         "prep_s": _fmt(prep),
         # None when capture skipped the filter (mesh already had normals)
         "vtkNormals_s": _fmt(st["normals"]) if not row.normals else "skipped",
@@ -363,6 +435,7 @@ def main(argv: list[str] | None = None) -> int:
             for _ in range(repeats):
                 row.capture.append(run_capture(mesh, n))
                 row.plain.append(run_plain(mesh, n))
+                row.valuepass.append(run_valuepass(mesh, n))
                 if not args.no_breakdown:
                     row.stages.append(run_breakdown(mesh, n))
             rows.append(row)

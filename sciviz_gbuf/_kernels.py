@@ -12,11 +12,32 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-__all__ = ["interpolate_points", "lookup_cells", "resolve_hits"]
+__all__ = ["accumulate_codes", "interpolate_points", "lookup_cells", "resolve_hits"]
 
 # Barycentric overshoot beyond which the hit is clamped onto the triangle. Below it, a pixel
 # centre just outside the exact triangle is the rasteriser's sub-pixel vertex snapping.
 _MAX_OVERSHOOT = 0.5
+
+
+@njit(parallel=True, cache=True)
+def accumulate_codes(px, shift, out):
+    """OR the 24-bit RGB codes of a bottom-up (H, W, 3) uint8 readback into ``out`` (row 0 on
+    top), shifted left by ``shift`` bits."""
+    h, w = out.shape
+    for r in prange(h):
+        src = h - 1 - r
+        for c in range(w):
+            code = (
+                np.int64(px[src, c, 0])
+                | (np.int64(px[src, c, 1]) << 8)
+                | (np.int64(px[src, c, 2]) << 16)
+            )
+            out[r, c] |= code << shift
+
+
+@njit(inline="always", cache=True)
+def _cross(ax, ay, az, bx, by, bz):
+    return ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
 
 
 @njit(parallel=True, cache=True)
@@ -42,6 +63,7 @@ def resolve_hits(tid, points, triangles, normals, inv_clip, eye, view_dir, rot, 
     depth = np.full((h, w), np.nan, dtype=np.float32)
     nrm = np.full((h, w, 3), np.nan, dtype=np.float32)
     bary = np.full((h, w, 3), np.nan, dtype=np.float32)
+    m = inv_clip
     for r in prange(h):
         yn = 2.0 * ((h - 1 - r) + 0.5) / h - 1.0
         for c in range(w):
@@ -49,53 +71,35 @@ def resolve_hits(tid, points, triangles, normals, inv_clip, eye, view_dir, rot, 
             if t < 0:
                 continue
             xn = 2.0 * (c + 0.5) / w - 1.0
-            # unproject the pixel centre at the near and far planes
-            p0 = np.empty(3)
-            p1 = np.empty(3)
-            hw0 = inv_clip[3, 0] * xn + inv_clip[3, 1] * yn - inv_clip[3, 2] + inv_clip[3, 3]
-            hw1 = inv_clip[3, 0] * xn + inv_clip[3, 1] * yn + inv_clip[3, 2] + inv_clip[3, 3]
-            for k in range(3):
-                base = inv_clip[k, 0] * xn + inv_clip[k, 1] * yn + inv_clip[k, 3]
-                p0[k] = (base - inv_clip[k, 2]) / hw0
-                p1[k] = (base + inv_clip[k, 2]) / hw1
-            d = p1 - p0
+            # unproject the pixel centre at the near (z=-1) and far (z=+1) planes
+            h0 = m[3, 0] * xn + m[3, 1] * yn - m[3, 2] + m[3, 3]
+            h1 = m[3, 0] * xn + m[3, 1] * yn + m[3, 2] + m[3, 3]
+            bx = m[0, 0] * xn + m[0, 1] * yn + m[0, 3]
+            by = m[1, 0] * xn + m[1, 1] * yn + m[1, 3]
+            bz = m[2, 0] * xn + m[2, 1] * yn + m[2, 3]
+            ox, oy, oz = (bx - m[0, 2]) / h0, (by - m[1, 2]) / h0, (bz - m[2, 2]) / h0
+            dx = (bx + m[0, 2]) / h1 - ox
+            dy = (by + m[1, 2]) / h1 - oy
+            dz = (bz + m[2, 2]) / h1 - oz
             i0 = triangles[t, 0]
             i1 = triangles[t, 1]
             i2 = triangles[t, 2]
-            v0 = points[i0]
-            e1 = points[i1] - v0
-            e2 = points[i2] - v0
-            pv = np.array(
-                [
-                    d[1] * e2[2] - d[2] * e2[1],
-                    d[2] * e2[0] - d[0] * e2[2],
-                    d[0] * e2[1] - d[1] * e2[0],
-                ]
-            )
-            det = e1[0] * pv[0] + e1[1] * pv[1] + e1[2] * pv[2]
-            g = np.array(
-                [
-                    e1[1] * e2[2] - e1[2] * e2[1],
-                    e1[2] * e2[0] - e1[0] * e2[2],
-                    e1[0] * e2[1] - e1[1] * e2[0],
-                ]
-            )
+            v0x, v0y, v0z = points[i0, 0], points[i0, 1], points[i0, 2]
+            e1x, e1y, e1z = points[i1, 0] - v0x, points[i1, 1] - v0y, points[i1, 2] - v0z
+            e2x, e2y, e2z = points[i2, 0] - v0x, points[i2, 1] - v0y, points[i2, 2] - v0z
+            px, py, pz = _cross(dx, dy, dz, e2x, e2y, e2z)
+            det = e1x * px + e1y * py + e1z * pz
+            gx, gy, gz = _cross(e1x, e1y, e1z, e2x, e2y, e2z)
             b1 = 1.0 / 3.0
             b2 = 1.0 / 3.0
             tt = np.nan
             if det != 0.0:
-                tv = p0 - v0
+                tx, ty, tz = ox - v0x, oy - v0y, oz - v0z
                 inv_det = 1.0 / det
-                b1 = (tv[0] * pv[0] + tv[1] * pv[1] + tv[2] * pv[2]) * inv_det
-                q = np.array(
-                    [
-                        tv[1] * e1[2] - tv[2] * e1[1],
-                        tv[2] * e1[0] - tv[0] * e1[2],
-                        tv[0] * e1[1] - tv[1] * e1[0],
-                    ]
-                )
-                b2 = (d[0] * q[0] + d[1] * q[1] + d[2] * q[2]) * inv_det
-                tt = (e2[0] * q[0] + e2[1] * q[1] + e2[2] * q[2]) * inv_det
+                b1 = (tx * px + ty * py + tz * pz) * inv_det
+                qx, qy, qz = _cross(tx, ty, tz, e1x, e1y, e1z)
+                b2 = (dx * qx + dy * qy + dz * qz) * inv_det
+                tt = (e2x * qx + e2y * qy + e2z * qz) * inv_det
             b0 = 1.0 - b1 - b2
             if np.isnan(tt) or min(b0, min(b1, b2)) < -_MAX_OVERSHOOT:
                 # clamp onto the triangle: never extrapolate far along a grazing plane
@@ -106,41 +110,44 @@ def resolve_hits(tid, points, triangles, normals, inv_clip, eye, view_dir, rot, 
                 b0 /= s
                 b1 /= s
                 b2 /= s
-                x = v0 + b1 * e1 + b2 * e2
+                x = v0x + b1 * e1x + b2 * e2x
+                y = v0y + b1 * e1y + b2 * e2y
+                z = v0z + b1 * e1z + b2 * e2z
             else:
                 # a small overshoot is the rasteriser's sub-pixel snapping: stay on the ray and
                 # extrapolate attributes consistently with the position
-                x = p0 + tt * d
-            c0 = b0
-            c1 = b1
-            c2 = b2
-            dep = 0.0
-            for k in range(3):
-                world[r, c, k] = x[k]
-                dep += (x[k] - eye[k]) * view_dir[k]
-            depth[r, c] = dep
-            bary[r, c, 0] = c0
-            bary[r, c, 1] = c1
-            bary[r, c, 2] = c2
-            n = np.empty(3)
-            for k in range(3):
-                n[k] = c0 * normals[i0, k] + c1 * normals[i1, k] + c2 * normals[i2, k]
+                x = ox + tt * dx
+                y = oy + tt * dy
+                z = oz + tt * dz
+            world[r, c, 0] = x
+            world[r, c, 1] = y
+            world[r, c, 2] = z
+            depth[r, c] = (
+                (x - eye[0]) * view_dir[0] + (y - eye[1]) * view_dir[1] + (z - eye[2]) * view_dir[2]
+            )
+            bary[r, c, 0] = b0
+            bary[r, c, 1] = b1
+            bary[r, c, 2] = b2
+            nx = b0 * normals[i0, 0] + b1 * normals[i1, 0] + b2 * normals[i2, 0]
+            ny = b0 * normals[i0, 1] + b1 * normals[i1, 1] + b2 * normals[i2, 1]
+            nz = b0 * normals[i0, 2] + b1 * normals[i1, 2] + b2 * normals[i2, 2]
             # the shading normal takes the side of the geometric normal, then both face the eye
-            if n[0] * g[0] + n[1] * g[1] + n[2] * g[2] < 0.0:
-                n = -n
+            sign = 1.0 if nx * gx + ny * gy + nz * gz >= 0.0 else -1.0
             if parallel:
-                facing = -(g[0] * view_dir[0] + g[1] * view_dir[1] + g[2] * view_dir[2])
+                facing = -(gx * view_dir[0] + gy * view_dir[1] + gz * view_dir[2])
             else:
-                facing = g[0] * (eye[0] - x[0]) + g[1] * (eye[1] - x[1]) + g[2] * (eye[2] - x[2])
+                facing = gx * (eye[0] - x) + gy * (eye[1] - y) + gz * (eye[2] - z)
             if facing < 0.0:
-                n = -n
-                g = -g
-            ln = np.sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2])
+                sign = -sign
+                gx, gy, gz = -gx, -gy, -gz
+            nx, ny, nz = sign * nx, sign * ny, sign * nz
+            ln = np.sqrt(nx * nx + ny * ny + nz * nz)
             if not ln > 1e-12:
-                n = g
-                ln = np.sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2])
+                # opposite vertex normals cancelled: fall back to the facet's own normal
+                nx, ny, nz = gx, gy, gz
+                ln = np.sqrt(nx * nx + ny * ny + nz * nz)
             for k in range(3):
-                nrm[r, c, k] = (rot[k, 0] * n[0] + rot[k, 1] * n[1] + rot[k, 2] * n[2]) / ln
+                nrm[r, c, k] = (rot[k, 0] * nx + rot[k, 1] * ny + rot[k, 2] * nz) / ln
     return world, depth, nrm, bary
 
 

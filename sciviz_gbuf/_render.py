@@ -21,6 +21,7 @@ from vtkmodules.vtkRenderingCore import vtkActor, vtkPolyDataMapper, vtkRenderer
 # The OpenGL2 module registers the render window/mapper factory overrides.
 import vtkmodules.vtkRenderingOpenGL2  # noqa: F401  # isort: skip
 
+from ._kernels import accumulate_codes
 from .errors import RenderError
 
 __all__ = ["BITS_PER_PASS", "IdRenderer", "new_render_window"]
@@ -134,9 +135,10 @@ class IdRenderer:
             buf = vtkUnsignedCharArray()
             if self.window.GetPixelData(0, 0, width - 1, height - 1, 0, buf, 0) == 0:
                 raise RenderError("could not read back the offscreen framebuffer")
-            px = vtk_to_numpy(buf).reshape(height, width, 3)[::-1].astype(np.int64)
-            out |= (px[..., 0] | (px[..., 1] << 8) | (px[..., 2] << 16)) << (p * BITS_PER_PASS)
-        return out - 1
+            px = vtk_to_numpy(buf).reshape(height, width, 3)
+            accumulate_codes(px, p * BITS_PER_PASS, out)
+        out -= 1  # code 0 is the black background
+        return out
 
     def close(self) -> None:
         """Release the OpenGL context."""

@@ -8,11 +8,13 @@ so every G-buffer value can be traced to the data it came from.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import numpy as np
 import pyvista as pv
+from vtkmodules.vtkCommonCore import vtkSMPTools
 from vtkmodules.vtkCommonDataModel import vtkDataObject, vtkDataSet, vtkMultiBlockDataSet
 from vtkmodules.vtkFiltersCore import vtkPolyDataNormals, vtkTriangleFilter
 from vtkmodules.vtkFiltersGeometry import vtkDataSetSurfaceFilter
@@ -164,6 +166,19 @@ def _existing_normals(poly: pv.PolyData) -> np.ndarray | None:
     return np.asarray(pv.convert_array(n), dtype=np.float64)
 
 
+@contextmanager
+def _smp_threads() -> Iterator[None]:
+    """Run VTK's SMP-parallel filters on threads for a moment (the wheels default to
+    sequential), restoring the caller's backend afterwards."""
+    before = vtkSMPTools.GetBackend()
+    changed = before == "Sequential" and vtkSMPTools.SetBackend("STDThread")
+    try:
+        yield
+    finally:
+        if changed:
+            vtkSMPTools.SetBackend(before)
+
+
 def _compute_normals(poly: pv.PolyData, feature_angle: float) -> pv.PolyData:
     alg = vtkPolyDataNormals()
     alg.SetInputData(poly)
@@ -173,7 +188,8 @@ def _compute_normals(poly: pv.PolyData, feature_angle: float) -> pv.PolyData:
     alg.AutoOrientNormalsOff()
     alg.ComputeCellNormalsOff()
     alg.ComputePointNormalsOn()
-    alg.Update()
+    with _smp_threads():
+        alg.Update()
     return pv.wrap(alg.GetOutput())
 
 
