@@ -65,9 +65,7 @@ def _resolve_camera(camera: object, scene: object, parallel: bool | None) -> tup
     if camera is None and _is_plotter(scene):
         cam.DeepCopy(scene.renderer.GetActiveCamera())
         # A Plotter that was never shown has not placed its camera yet: place it as it will.
-        camera = None if not scene.renderer.camera_set else cam
-        if camera is None:
-            camera = "iso"
+        camera = cam if scene.renderer.camera_set else "iso"
     if camera is None:
         camera = "iso"
     if isinstance(camera, str):

@@ -19,6 +19,7 @@ from .capture import _check_window_size, capture
 from .compose import colorize, ids_to_rgb, montage, normals_to_rgb, write_png
 from .datasets import load_jacksboro_terrain, load_nut
 from .errors import InputError
+from .filters import lambert
 from .gbuffer import GBuffer
 
 __all__ = ["run_demo", "terrain_birdseye_camera"]
@@ -35,6 +36,8 @@ CAPTIONS = {
     "cell_id": "cell id: cell of the dataset, one hashed colour per cell",
     "mask": "mask: coverage, white where the scene covers the pixel",
 }
+# Upper-left light in eye space, as in hand drawn illustrations.
+_LIGHT = (-0.4, 0.5, 0.77)
 
 
 @dataclass
@@ -44,12 +47,23 @@ class _Scene:
     dataset: object
     camera: object = None
     scalars: tuple[str, ...] = ()
+    # (azimuth, altitude) in degrees of a world-space sun for the shade; None: eye-space light
+    sun: tuple[float, float] | None = None
     # Filled in by _write_scene, read by _write_index.
     images: list[tuple[str, Path]] = field(default_factory=list)
     files: list[Path] = field(default_factory=list)
     npz: Path | None = None
     timings: dict[str, float] = field(default_factory=dict)
     gbuffer: GBuffer | None = None
+
+    @property
+    def shade_caption(self) -> str:
+        light = (
+            "light from the upper left of the view"
+            if self.sun is None
+            else f"sun at azimuth {self.sun[0]:g}°, altitude {self.sun[1]:g}° (GDAL convention)"
+        )
+        return f"sh: Lambert shade from the normals alone (Saito 1990 Fig. 9), {light}"
 
 
 def terrain_birdseye_camera(
@@ -119,16 +133,28 @@ def _scenes(aspect: float) -> list[_Scene]:
             terrain,
             camera=terrain_birdseye_camera(terrain.bounds, aspect=aspect),
             scalars=("elevation",),
+            sun=(315.0, 45.0),
         ),
     ]
 
 
-def _channel_images(g: GBuffer) -> list[tuple[str, str, np.ndarray]]:
+def _shade(g: GBuffer, scene: _Scene) -> np.ndarray:
+    """Headlight-free shade: an upper-left eye-space light, or the scene's world-space sun."""
+    if scene.sun is None:
+        return lambert(g.normal, light=_LIGHT, ambient=0.15)
+    az, alt = np.radians(scene.sun)
+    # GDAL's convention: azimuth clockwise from north (+y), altitude above the horizon
+    sun = (np.sin(az) * np.cos(alt), np.cos(az) * np.cos(alt), np.sin(alt))
+    return lambert(g.world_normal(), light=sun, ambient=0.0)
+
+
+def _channel_images(g: GBuffer, scene: _Scene) -> list[tuple[str, str, np.ndarray]]:
     """``(key, caption, image)`` of every channel of ``g``."""
     out = [
         ("depth", CAPTIONS["depth"], colorize(g.depth)),
         ("sz", CAPTIONS["sz"], colorize(g.sz)),
         ("normal", CAPTIONS["normal"], normals_to_rgb(g.normal)),
+        ("shade", scene.shade_caption, colorize(_shade(g, scene), cmap="gray", vmin=0, vmax=1)),
     ]
     for i, axis in enumerate("xyz"):
         key = f"world_{axis}"
@@ -157,7 +183,7 @@ def _write_scene(
         progress_bar=progress_bar,
     )
     t1 = time.perf_counter()
-    images = _channel_images(g)
+    images = _channel_images(g, scene)
     for key, caption, image in images:
         path = write_png(outdir / f"{scene.name}_{key}.png", image)
         scene.images.append((caption, path))

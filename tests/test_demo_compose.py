@@ -268,7 +268,7 @@ def test_run_demo_files(demo):
     assert files[-1] == outdir / "index.html"
     assert sorted(files) == sorted(outdir.iterdir())  # nothing written beside them
     pngs = [p for p in files if p.suffix == ".png"]
-    assert len(pngs) == 2 * 10 + 1  # 9 channels + montage per scene, + terrain elevation
+    assert len(pngs) == 2 * 11 + 1  # 9 channels + shade + montage per scene, + terrain elevation
     for p in files:
         assert p.is_file() and p.stat().st_size > 0
     for p in pngs:
