@@ -146,6 +146,11 @@ def _interpolate_named(
 ) -> np.ndarray:
     """One requested array, from each object's point or cell data; NaN where an object lacks it."""
     found = [s.array(name) for s in surfaces]
+    for s, f in zip(surfaces, found, strict=True):
+        if f is not None and f[1].dtype.kind not in "biuf":
+            raise InputError(
+                f"scalars: array {name!r} of {s.name} is not numeric (dtype {f[1].dtype})"
+            )
     comps = {v.reshape(v.shape[0], -1).shape[1] for f in found if f is not None for v in [f[1]]}
     if len(comps) > 1:
         raise InputError(f"scalars: array {name!r} has different component counts {sorted(comps)}")

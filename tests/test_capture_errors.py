@@ -130,3 +130,10 @@ def test_any_window_size_gives_consistent_buffers(w, h, parallel, view):
 def test_invalid_window_sizes_raise_input_error(size):
     with pytest.raises(sg.InputError, match="window_size"):
         sg.capture(SPHERE, window_size=size)
+
+
+def test_non_numeric_array_is_refused():
+    s = SPHERE.copy()
+    s.cell_data["names"] = np.array(["a"] * s.n_cells)
+    with pytest.raises(sg.InputError, match=r"'names' of dataset 0 .* not numeric"):
+        sg.capture(s, window_size=(16, 16), scalars="names")

@@ -170,3 +170,20 @@ def test_sphere_normals_from_data_are_used(sphere):
     ang = angle_deg(g.normal[inner], n_true[inner])
     # exact vertex normals: interpolation error is below half the edge angle
     assert ang.max() < 0.5 * np.degrees(np.sqrt(4 * np.pi / s.n_cells * 4 / np.sqrt(3)))
+
+
+@pytest.mark.parametrize("parallel", [False, True])
+def test_camera_helpers_agree_with_the_buffers(sphere, parallel):
+    g = sg.capture(sphere, window_size=(90, 70), camera="yz", parallel_projection=parallel)
+    # sz from the public helper equals the captured channel
+    assert np.array_equal(g.camera.sz_from_depth(g.depth), g.sz, equal_nan=True)
+    # pixel_rays (from VTK's matrices) equal the textbook rays, and every hit lies on its ray
+    o, d = g.camera.pixel_rays()
+    o2, d2 = rays_by_hand(g.camera)
+    assert np.allclose(d, d2, atol=1e-12)
+    w = o - o2  # origins differ only along the ray (near plane vs eye)
+    assert np.allclose(w - np.sum(w * d2, axis=-1, keepdims=True) * d2, 0.0, atol=1e-9)
+    v = g.world.astype(np.float64) - o
+    off_ray = np.linalg.norm(v - np.sum(v * d, axis=-1, keepdims=True) * d, axis=-1)
+    assert off_ray[g.mask].max() < 1e-5 * RADIUS
+    assert g.camera.to_vtk().GetPosition() == pytest.approx(g.camera.position)
