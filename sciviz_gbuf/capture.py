@@ -141,6 +141,17 @@ def _fit_clipping(cam: vtkCamera, points: np.ndarray) -> None:
     cam.SetClippingRange(near, far)
 
 
+def _interpolate_point_arrays(
+    per_object: list[np.ndarray | None], k: int, tid, bary, triangles, n_pts
+) -> np.ndarray:
+    """Interpolate each object's (n_i, k) point array (None: NaN) to (H, W, k) float32."""
+    vals = np.full((int(n_pts[-1]), k), np.nan, dtype=np.float64)
+    for i, a in enumerate(per_object):
+        if a is not None:
+            vals[n_pts[i] : n_pts[i + 1]] = a.reshape(a.shape[0], k)
+    return _kernels.interpolate_points(tid, bary, triangles, vals)
+
+
 def _interpolate_named(
     surfaces: list[Surface], name: str, tid: np.ndarray, bary: np.ndarray, triangles, n_pts
 ) -> np.ndarray:
@@ -161,11 +172,8 @@ def _interpolate_named(
     has_cell = any(f is not None and f[0] == "cell" for f in found)
     out = None
     if has_point:
-        vals = np.full((int(n_pts[-1]), k), np.nan, dtype=np.float64)
-        for i, f in enumerate(found):
-            if f is not None and f[0] == "point":
-                vals[n_pts[i] : n_pts[i + 1]] = f[1].reshape(f[1].shape[0], k)
-        out = _kernels.interpolate_points(tid, bary, triangles, vals)
+        per_object = [f[1] if f is not None and f[0] == "point" else None for f in found]
+        out = _interpolate_point_arrays(per_object, k, tid, bary, triangles, n_pts)
     if has_cell:
         vals = np.full((n_tri, k), np.nan, dtype=np.float32)
         for i, f in enumerate(found):
@@ -309,11 +317,7 @@ def capture(
         uv = None
         tcs = [s.texture_coordinates() for s in surfaces]
         if any(t is not None for t in tcs):
-            vals = np.full((int(n_pts[-1]), 2), np.nan, dtype=np.float64)
-            for i, t in enumerate(tcs):
-                if t is not None:
-                    vals[n_pts[i] : n_pts[i + 1]] = t
-            uv = _kernels.interpolate_points(tid, bary, triangles, vals)
+            uv = _interpolate_point_arrays(tcs, 2, tid, bary, triangles, n_pts)
         captured = {n: _interpolate_named(surfaces, n, tid, bary, triangles, n_pts) for n in names}
         bar.step("done")
 
