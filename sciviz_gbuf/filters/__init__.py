@@ -1,7 +1,32 @@
 """Image-space operators on G-buffer channels: pure functions on numpy arrays (and a mask),
 returning new float32 arrays; inputs are never modified. Shades are in [0, 1] with 1 = lit;
-line images are ink in [0, 1] with 1 = full ink."""
+line images are ink in [0, 1] with 1 = full ink (signed images are documented as such)."""
 
+from .edges import crease_edges, edge_map, enhance, id_edges, internal_edges, profile_edges
+from .operators import (
+    c1_discontinuity,
+    diagonal_depth_discontinuity,
+    diagonal_normal_discontinuity,
+    normalize_gradient,
+    second_order,
+    sobel_gradient,
+    suppress_zeroth_order,
+)
 from .shading import lambert
 
-__all__ = ["lambert"]
+__all__ = [
+    "c1_discontinuity",
+    "crease_edges",
+    "diagonal_depth_discontinuity",
+    "diagonal_normal_discontinuity",
+    "edge_map",
+    "enhance",
+    "id_edges",
+    "internal_edges",
+    "lambert",
+    "normalize_gradient",
+    "profile_edges",
+    "second_order",
+    "sobel_gradient",
+    "suppress_zeroth_order",
+]

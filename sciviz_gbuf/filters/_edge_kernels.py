@@ -1,0 +1,237 @@
+"""Numba kernels that classify neighbouring G-buffer pixel pairs into profile / crease edges.
+
+The depth test works on Saito's ``sz`` (1990 Eq. 6), which is an affine function of the screen
+position on any plane (for both projections), so a plane at any angle has exactly zero second
+difference. A step ``J = sz(Y) - sz(X)`` between neighbours is a 0th-order discontinuity only
+if neither the slope on X's side nor the slope on Y's side, nor a crease anywhere between the
+two pixels (any value between those two predictions), explains it: the *unexplained jump* is
+the distance of ``J`` from the interval spanned by the one-sided slopes. It is converted from
+``sz`` units to pixel footprints at the nearer pixel (factor ``z / d`` in perspective, 1 in
+parallel projection), so the threshold reads "a step of so many pixel widths".
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+__all__ = ["edge_map_kernel", "id_edge_kernel", "pair_edge_kernel"]
+
+# The four 4-neighbour directions (dr, dc): right, left, down, up; and the 8 of C1.
+_DR4 = np.array([0, 0, 1, -1], dtype=np.int64)
+_DC4 = np.array([1, -1, 0, 0], dtype=np.int64)
+
+
+@njit(inline="always", cache=True)
+def _valid(sz, m, r, c):
+    h, w = sz.shape
+    if r < 0 or r >= h or c < 0 or c >= w:
+        return False
+    v = sz[r, c]
+    return m[r, c] and (v - v == 0.0)
+
+
+@njit(inline="always", cache=True)
+def _inside(sz, r, c):
+    h, w = sz.shape
+    return r >= 0 and r < h and c >= 0 and c < w
+
+
+@njit(inline="always", cache=True)
+def _unexplained(jump, s_left, ok_left, s_right, ok_right):
+    """Distance of ``jump`` from the interval of the available one-sided predictions."""
+    if ok_left and ok_right:
+        lo = min(s_left, s_right)
+        hi = max(s_left, s_right)
+        if jump < lo:
+            return lo - jump
+        if jump > hi:
+            return jump - hi
+        return 0.0
+    if ok_left:
+        return abs(jump - s_left)
+    if ok_right:
+        return abs(jump - s_right)
+    return abs(jump)
+
+
+@njit(inline="always", cache=True)
+def _pair_gap(sz, depth, m, r, c, dr, dc, steps, parallel, inv_d):
+    """Unexplained jump, in pixel footprints, between (r, c) and (r + steps dr, c + steps dc).
+
+    Both pixels must be valid. One-sided slopes come from the pixels ``steps`` further out.
+    """
+    r2, c2 = r + steps * dr, c + steps * dc
+    x = np.float64(sz[r, c])
+    y = np.float64(sz[r2, c2])
+    ok_l = _valid(sz, m, r - dr, c - dc)
+    ok_r = _valid(sz, m, r2 + dr, c2 + dc)
+    s_l = (x - sz[r - dr, c - dc]) * steps if ok_l else 0.0
+    s_r = (sz[r2 + dr, c2 + dc] - y) * steps if ok_r else 0.0
+    gap = _unexplained(y - x, s_l, ok_l, s_r, ok_r)
+    if parallel:
+        return gap
+    near = min(np.float64(depth[r, c]), np.float64(depth[r2, c2]))
+    return gap * near * inv_d
+
+
+@njit(inline="always", cache=True)
+def _ramp(value, start, width):
+    t = (value - start) / width
+    return min(1.0, max(0.0, t))
+
+
+@njit(inline="always", cache=True)
+def _angle(n, r, c, r2, c2):
+    d = n[r, c, 0] * n[r2, c2, 0] + n[r, c, 1] * n[r2, c2, 1] + n[r, c, 2] * n[r2, c2, 2]
+    return math.degrees(math.acos(min(1.0, max(-1.0, np.float64(d)))))
+
+
+@njit(inline="always", cache=True)
+def _eye(depth, r, c, h, w, parallel, inv_d, inv_w):
+    """Eye-space position of pixel (r, c) in units of the focal-plane pixel size."""
+    z = np.float64(depth[r, c])
+    k = 1.0 if parallel else z * inv_d
+    return (c + 0.5 - 0.5 * w) * k, (0.5 * h - r - 0.5) * k, -z * inv_w
+
+
+@njit(parallel=True, cache=True)
+def pair_edge_kernel(
+    sz, depth, normal, m, parallel, inv_d, inv_w, jump, crease, soft, profile_out, crease_out
+):
+    """Profile ink on the nearer pixel of each 4-neighbour pair with an unexplained jump
+    (the covered pixel next to the background counts as an infinite jump), and signed crease
+    ink (> 0 convex) on X for the pairs (X, right) and (X, down) whose normals differ by more
+    than ``crease`` degrees and whose depths are continuous."""
+    h, w = sz.shape
+    for r in prange(h):
+        r = np.int64(r)
+        for c in range(w):
+            profile_out[r, c] = 0.0
+            crease_out[r, c] = 0.0
+            if not _valid(sz, m, r, c):
+                continue
+            prof = 0.0
+            best = 0.0
+            for k in range(4):
+                dr, dc = _DR4[k], _DC4[k]
+                r2, c2 = r + dr, c + dc
+                if not _inside(sz, r2, c2):
+                    continue
+                if not _valid(sz, m, r2, c2):
+                    prof = 1.0
+                    continue
+                gap = _pair_gap(sz, depth, m, r, c, dr, dc, 1, parallel, inv_d)
+                if sz[r, c] > sz[r2, c2]:
+                    prof = max(prof, _ramp(gap, jump, jump))
+                if k == 1 or k == 3 or gap > jump:
+                    continue
+                ang = _angle(normal, r, c, r2, c2)
+                ink = _ramp(ang, crease, soft)
+                if ink > abs(best):
+                    # Convex iff (nY - nX) . (PY - PX) > 0 (monotone normal map).
+                    x1, y1, z1 = _eye(depth, r, c, h, w, parallel, inv_d, inv_w)
+                    x2, y2, z2 = _eye(depth, r2, c2, h, w, parallel, inv_d, inv_w)
+                    s = (
+                        (normal[r2, c2, 0] - normal[r, c, 0]) * (x2 - x1)
+                        + (normal[r2, c2, 1] - normal[r, c, 1]) * (y2 - y1)
+                        + (normal[r2, c2, 2] - normal[r, c, 2]) * (z2 - z1)
+                    )
+                    best = ink if s >= 0.0 else -ink
+            profile_out[r, c] = prof
+            crease_out[r, c] = best
+
+
+@njit(parallel=True, cache=True)
+def id_edge_kernel(ids, depth, out):
+    """1 on covered pixels X (``ids >= 0``) with a 4-neighbour Y of another id: the nearer of
+    the two carries the line (ties: the upper / left one), and a background neighbour counts."""
+    h, w = ids.shape
+    for r in prange(h):
+        r = np.int64(r)
+        for c in range(w):
+            a = ids[r, c]
+            v = 0.0
+            if a >= 0:
+                for k in range(4):
+                    r2, c2 = r + _DR4[k], c + _DC4[k]
+                    if not (0 <= r2 < h and 0 <= c2 < w):
+                        continue
+                    b = ids[r2, c2]
+                    if b == a:
+                        continue
+                    if (
+                        b < 0
+                        or depth[r, c] < depth[r2, c2]
+                        or (depth[r, c] == depth[r2, c2] and (k == 0 or k == 2))
+                    ):
+                        v = 1.0
+            out[r, c] = v
+
+
+@njit(inline="always", cache=True)
+def _pair_jump(sz, depth, m, r, c, dr, dc, steps, parallel, inv_d, jump):
+    """Depth discontinuity strength in [0, 1] of the pair (r, c) -> (r + steps d)."""
+    r2, c2 = r + steps * dr, c + steps * dc
+    if not (_inside(sz, r, c) and _inside(sz, r2, c2)):
+        return 0.0  # the image border is not an edge
+    a = _valid(sz, m, r, c)
+    b = _valid(sz, m, r2, c2)
+    if a != b:
+        return 1.0
+    if not a:
+        return 0.0
+    return _ramp(_pair_gap(sz, depth, m, r, c, dr, dc, steps, parallel, inv_d), jump, jump)
+
+
+@njit(parallel=True, cache=True)
+def edge_map_kernel(sz, depth, normal, m, parallel, inv_d, jump, crease, soft, use_c1, out):
+    """The 2003 edge map: RGB = inner (normal) intensity, A = profile (depth) intensity.
+
+    Inner: the 2003 diagonal pairs (A, H) and (C, F) around X, from the pair with the smaller
+    cosine (the pair that crosses an edge running along a diagonal). Profile: the diagonal
+    ``1 - I_Z`` over the unexplained jumps of the same pairs scaled to [0, 2], or the C1 sum
+    over the 8 neighbours of X (``use_c1``) scaled so a straight step gives 1.
+    """
+    h, w = sz.shape
+    for r in prange(h):
+        r = np.int64(r)
+        for c in range(w):
+            inner = 0.0
+            if _valid(sz, m, r, c):
+                cmin = 1.0
+                for dc in (-1, 1):
+                    r1, c1, r2, c2 = r - 1, c + dc, r + 1, c - dc
+                    if _valid(sz, m, r1, c1) and _valid(sz, m, r2, c2):
+                        d = (
+                            normal[r1, c1, 0] * normal[r2, c2, 0]
+                            + normal[r1, c1, 1] * normal[r2, c2, 1]
+                            + normal[r1, c1, 2] * normal[r2, c2, 2]
+                        )
+                        cmin = min(cmin, np.float64(d))
+                ang = math.degrees(math.acos(min(1.0, max(-1.0, cmin))))
+                inner = _ramp(ang, crease, soft)
+            if use_c1:
+                total = 0.0
+                for dr in (-1, 0, 1):
+                    for dc in (-1, 0, 1):
+                        if dr == 0 and dc == 0:
+                            continue
+                        wgt = 1.0 if (dr != 0 and dc != 0) else 2.0
+                        jmp = _pair_jump(sz, depth, m, r, c, dr, dc, 1, parallel, inv_d, jump)
+                        total += wgt * jmp
+                prof = min(1.0, 2.0 * total / 8.0)
+            else:
+                iz = 1.0
+                for dc in (-1, 1):
+                    rr, cc = r - 1, c + dc  # A or C; its partner H or F is two steps away
+                    j = 2.0 * _pair_jump(sz, depth, m, rr, cc, 1, -dc, 2, parallel, inv_d, jump)
+                    s = 1.0 - 0.5 * j
+                    iz *= s * s
+                prof = 1.0 - iz
+            out[r, c, 0] = inner
+            out[r, c, 1] = inner
+            out[r, c, 2] = inner
+            out[r, c, 3] = prof
