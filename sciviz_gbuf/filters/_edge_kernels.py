@@ -22,6 +22,8 @@ __all__ = ["edge_map_kernel", "id_edge_kernel", "pair_edge_kernel"]
 # The four 4-neighbour directions (dr, dc): right, left, down, up; and the 8 of C1.
 _DR4 = np.array([0, 0, 1, -1], dtype=np.int64)
 _DC4 = np.array([1, -1, 0, 0], dtype=np.int64)
+# Largest turn of the surface next to a depth crease, relative to the crease's own turn.
+_FLANK = 0.25
 
 
 @njit(inline="always", cache=True)
@@ -41,20 +43,21 @@ def _inside(sz, r, c):
 
 @njit(inline="always", cache=True)
 def _unexplained(jump, s_left, ok_left, s_right, ok_right):
-    """Distance of ``jump`` from the interval of the available one-sided predictions."""
-    if ok_left and ok_right:
-        lo = min(s_left, s_right)
-        hi = max(s_left, s_right)
-        if jump < lo:
-            return lo - jump
-        if jump > hi:
-            return jump - hi
+    """Distance of ``jump`` from the interval of the two one-sided predictions.
+
+    A side without a slope (background or image border next to it, e.g. the last pixel
+    before a smooth object's silhouette, where the surface may be arbitrarily steep) leaves
+    the step unconstrained: no evidence of a discontinuity, so 0.
+    """
+    if not (ok_left and ok_right):
         return 0.0
-    if ok_left:
-        return abs(jump - s_left)
-    if ok_right:
-        return abs(jump - s_right)
-    return abs(jump)
+    lo = min(s_left, s_right)
+    hi = max(s_left, s_right)
+    if jump < lo:
+        return lo - jump
+    if jump > hi:
+        return jump - hi
+    return 0.0
 
 
 @njit(inline="always", cache=True)
@@ -97,14 +100,81 @@ def _eye(depth, r, c, h, w, parallel, inv_d, inv_w):
     return (c + 0.5 - 0.5 * w) * k, (0.5 * h - r - 0.5) * k, -z * inv_w
 
 
+@njit(inline="always", cache=True)
+def _turn(ax, ay, az, bx, by, bz):
+    """Angle in degrees between two 3-vectors (atan2 form: exact near 0); 0 if one is null."""
+    cx = ay * bz - az * by
+    cy = az * bx - ax * bz
+    cz = ax * by - ay * bx
+    cross = math.sqrt(cx * cx + cy * cy + cz * cz)
+    dot = ax * bx + ay * by + az * bz
+    if cross == 0.0 and dot == 0.0:
+        return 0.0
+    return math.degrees(math.atan2(cross, dot))
+
+
+@njit(inline="always", cache=True)
+def _section_turn(depth, r0, c0, r1, c1, r2, c2, r3, c3, h, w, parallel, inv_d, inv_w):
+    """Angle between the eye-space segments P0 -> P1 and P2 -> P3."""
+    x0, y0, z0 = _eye(depth, r0, c0, h, w, parallel, inv_d, inv_w)
+    x1, y1, z1 = _eye(depth, r1, c1, h, w, parallel, inv_d, inv_w)
+    x2, y2, z2 = _eye(depth, r2, c2, h, w, parallel, inv_d, inv_w)
+    x3, y3, z3 = _eye(depth, r3, c3, h, w, parallel, inv_d, inv_w)
+    return _turn(x1 - x0, y1 - y0, z1 - z0, x3 - x2, y3 - y2, z3 - z2)
+
+
+@njit(inline="always", cache=True)
+def _depth_crease(sz, depth, m, r, c, dr, dc, h, w, parallel, inv_d, inv_w, jump):
+    """Signed 1st-order discontinuity of the depth between X = (r, c) and Y = X + d, degrees.
+
+    The surface's section through the four pixels X - d, X, Y, Y + d (eye-space positions
+    from the depth) turns by the angle between the segments (X - d -> X) and (Y -> Y + d);
+    that is exact for two planes meeting anywhere between X and Y. Non-maximum suppression
+    against the neighbouring pairs keeps the one pair that straddles the crease, so the line
+    is one pixel wide, and the flanks on either side must be nearly straight. The sign is
+    that of the change of ``sz`` slope: a projective map keeps
+    convexity, and ``sz`` is affine on planes, so a convex edge has ``s_right < s_left``.
+    Returns 0 when a pixel of the stencil is missing or across a depth discontinuity.
+    """
+    rm, cm = r - dr, c - dc
+    r2, c2 = r + dr, c + dc
+    rp, cp = r2 + dr, c2 + dc
+    if not (_valid(sz, m, rm, cm) and _valid(sz, m, rp, cp)):
+        return 0.0
+    if _pair_gap(sz, depth, m, rm, cm, dr, dc, 1, parallel, inv_d) > jump:
+        return 0.0
+    if _pair_gap(sz, depth, m, r2, c2, dr, dc, 1, parallel, inv_d) > jump:
+        return 0.0
+    rmm, cmm = rm - dr, cm - dc
+    rpp, cpp = rp + dr, cp + dc
+    if not (_valid(sz, m, rmm, cmm) and _valid(sz, m, rpp, cpp)):
+        return 0.0
+    ang = _section_turn(depth, rm, cm, r, c, r2, c2, rp, cp, h, w, parallel, inv_d, inv_w)
+    left = _section_turn(depth, rmm, cmm, rm, cm, r, c, r2, c2, h, w, parallel, inv_d, inv_w)
+    right = _section_turn(depth, r, c, r2, c2, rp, cp, rpp, cpp, h, w, parallel, inv_d, inv_w)
+    if ang < left or ang <= right:
+        return 0.0
+    # A crease turns within one pixel between flat flanks; a smooth surface near its
+    # silhouette turns steadily over many pixels (and so do facets seen edge-on there).
+    flank_l = _section_turn(depth, rmm, cmm, rm, cm, rm, cm, r, c, h, w, parallel, inv_d, inv_w)
+    flank_r = _section_turn(depth, r2, c2, rp, cp, rp, cp, rpp, cpp, h, w, parallel, inv_d, inv_w)
+    if max(flank_l, flank_r) > _FLANK * ang:
+        return 0.0
+    s_left = np.float64(sz[r, c]) - np.float64(sz[rm, cm])
+    s_right = np.float64(sz[rp, cp]) - np.float64(sz[r2, c2])
+    return ang if s_right <= s_left else -ang
+
+
 @njit(parallel=True, cache=True)
 def pair_edge_kernel(
     sz, depth, normal, m, parallel, inv_d, inv_w, jump, crease, soft, profile_out, crease_out
 ):
     """Profile ink on the nearer pixel of each 4-neighbour pair with an unexplained jump
     (the covered pixel next to the background counts as an infinite jump), and signed crease
-    ink (> 0 convex) on X for the pairs (X, right) and (X, down) whose normals differ by more
-    than ``crease`` degrees and whose depths are continuous."""
+    ink (> 0 convex) on X for the pairs (X, right) and (X, down) whose depths are continuous
+    and whose surface turns by more than ``crease`` degrees: the larger of the angle between
+    the buffer's normals and the depth's own section angle (:func:`_depth_crease`), so data
+    with normals smoothed across a real crease still shows it."""
     h, w = sz.shape
     for r in prange(h):
         r = np.int64(r)
@@ -128,9 +198,9 @@ def pair_edge_kernel(
                     prof = max(prof, _ramp(gap, jump, jump))
                 if k == 1 or k == 3 or gap > jump:
                     continue
+                geo = _depth_crease(sz, depth, m, r, c, dr, dc, h, w, parallel, inv_d, inv_w, jump)
                 ang = _angle(normal, r, c, r2, c2)
-                ink = _ramp(ang, crease, soft)
-                if ink > abs(best):
+                if ang > abs(geo):
                     # Convex iff (nY - nX) . (PY - PX) > 0 (monotone normal map).
                     x1, y1, z1 = _eye(depth, r, c, h, w, parallel, inv_d, inv_w)
                     x2, y2, z2 = _eye(depth, r2, c2, h, w, parallel, inv_d, inv_w)
@@ -139,9 +209,14 @@ def pair_edge_kernel(
                         + (normal[r2, c2, 1] - normal[r, c, 1]) * (y2 - y1)
                         + (normal[r2, c2, 2] - normal[r, c, 2]) * (z2 - z1)
                     )
-                    best = ink if s >= 0.0 else -ink
+                    geo = ang if s >= 0.0 else -ang
+                ink = _ramp(abs(geo), crease, soft)
+                if ink > abs(best):
+                    best = ink if geo >= 0.0 else -ink
             profile_out[r, c] = prof
-            crease_out[r, c] = best
+            # A full profile pixel belongs to the outline; the depth there (e.g. along a
+            # smooth silhouette) says nothing reliable about creases.
+            crease_out[r, c] = best if prof < 1.0 else 0.0
 
 
 @njit(parallel=True, cache=True)

@@ -226,7 +226,9 @@ def edge_map(
         from the C1 operator (1990 Eq. 9 / 2003 second variant) over the 8 neighbours with the
         same jump measure, scaled so that a straight step gives 1; inner edges as above.
         Both straddle the edge (lines about two pixels wide, softer than
-        :func:`profile_edges`), as in the paper.
+        :func:`profile_edges`), as in the paper. Inner edges also include the creases the
+        depth shows (see :func:`internal_edges`), for data whose normals are smoothed across
+        real creases.
     crease_angle, depth_jump, width
         As in :func:`internal_edges` and :func:`profile_edges`.
 
@@ -260,6 +262,9 @@ def edge_map(
         operator == "c1",
         out,
     )
+    # Data whose normals are smoothed across real creases: add the depth's own creases.
+    _, crease = _pair_edges(gb, depth_jump, crease_angle)
+    np.maximum(out[..., 0], np.abs(crease), out=out[..., 0])
     # The 2003 lines already straddle the edge (two buffer pixels): dilate by one pixel less.
     size = max(1, round(width * gb.supersample) - 1)
     inner = _finish(gb, out[..., 0], size / gb.supersample)
