@@ -3,6 +3,8 @@ geometry: where the lines must be, where they must not be, their sign, width and
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 import pyvista as pv
@@ -115,7 +117,8 @@ def test_crease_is_the_unsigned_internal_edge_and_profile_is_not_a_crease(cube_c
 @pytest.mark.parametrize(
     "shape",
     [
-        pytest.param(lambda: pv.Sphere(radius=1, theta_resolution=48, phi_resolution=48), id="sphere"),
+        pytest.param(lambda: pv.Sphere(radius=1, theta_resolution=48, phi_resolution=48),
+                     id="sphere"),
         pytest.param(lambda: pv.Cylinder(radius=1, height=2.5, resolution=96, capping=True,
                                           direction=(0, 0, 1)), id="cylinder"),
         pytest.param(lambda: pv.ParametricTorus(ringradius=1.0, crosssectionradius=0.35),
@@ -134,7 +137,7 @@ def test_smooth_tessellated_surfaces_have_no_internal_edges(shape, parallel):
         t = np.linspace(0, 2 * np.pi, 721)
         for z in (-1.25, 1.25):
             p = project(gb.camera, np.c_[np.cos(t), np.sin(t), np.full_like(t, z)])
-            allowed |= segment_image(gb.shape, list(zip(p[:-1], p[1:], strict=True)))
+            allowed |= segment_image(gb.shape, list(itertools.pairwise(p)))
         allowed = near(allowed, 2.0)
         assert (internal[allowed] > 0.5).sum() > 100  # the rims are drawn, convex
     assert np.abs(internal[~allowed]).max() < 0.25, np.abs(internal[~allowed]).max()
@@ -202,7 +205,6 @@ def test_concave_edge_is_negative_and_convex_positive():
 # --------------------------------------------------------------------------- width, AA
 def _box_front():
     """A box seen face-on in parallel projection: its left outline is a vertical line."""
-    box = pv.Box(bounds=(-1, 1, -1, 1, -1, 1))
     return _camera((0, -5, 0), up=(0, 0, 1), parallel=True, scale=1.5)
 
 
@@ -245,7 +247,7 @@ def test_enhance_and_edge_map_compose_as_in_2003(cube_capture):
 
 
 def test_id_edges_outline_objects_and_cells(cube_capture):
-    cube, gb = cube_capture
+    _, gb = cube_capture
     objs = id_edges(gb, ids="object") > 0.5
     np.testing.assert_array_equal(objs, profile_edges(gb) == 1.0)  # one object: its outline
     cells = id_edges(gb, ids="cell") > 0.5
