@@ -268,37 +268,44 @@ def run(name: str, image: np.ndarray, mask: np.ndarray | None, k: float = 1.0, a
 
 
 @njit(inline="always", cache=True)
-def _nvalid(n, m, masked, r, c):
-    x, y, z = n[r, c, 0], n[r, c, 1], n[r, c, 2]
-    ok = (x - x == 0) & (y - y == 0) & (z - z == 0)
-    if masked:
-        ok = ok & m[r, c]
-    return ok
+def _nrow_ok(n, m, c):
+    x, y, z = n[c, 0], n[c, 1], n[c, 2]
+    return (x - x == 0) & (y - y == 0) & (z - z == 0) & m[c]
 
 
 @njit(inline="always", cache=True)
-def _ndot(n, m, masked, r1, c1, in1, r2, c2, in2, r, c):
-    """Dot product of the normals at two pixels; an invalid one takes the centre's normal."""
-    if not (in1 and _nvalid(n, m, masked, r1, c1)):
-        r1, c1 = r, c
-    if not (in2 and _nvalid(n, m, masked, r2, c2)):
-        r2, c2 = r, c
-    return n[r1, c1, 0] * n[r2, c2, 0] + n[r1, c1, 1] * n[r2, c2, 1] + n[r1, c1, 2] * n[r2, c2, 2]
+def _ndot_pair(u, mu, cu, lo, ml, cl, inside_u, inside_l, x0, x1, x2):
+    """Dot of the normals u[cu] and lo[cl]; an invalid one takes the centre's (x0, x1, x2)."""
+    oku = inside_u and _nrow_ok(u, mu, cu)
+    okl = inside_l and _nrow_ok(lo, ml, cl)
+    a0 = u[cu, 0] if oku else x0
+    a1 = u[cu, 1] if oku else x1
+    a2 = u[cu, 2] if oku else x2
+    b0 = lo[cl, 0] if okl else x0
+    b1 = lo[cl, 1] if okl else x1
+    b2 = lo[cl, 2] if okl else x2
+    return a0 * b0 + a1 * b1 + a2 * b2
 
 
 @njit(parallel=True, cache=True)
-def diag_normal(n, m, masked, out):
+def diag_normal(n, m, out):
     """2003 §4.1.2: ``I_N = (A.H + C.F) / 2`` over unit normals, clipped to [-1, 1]; 1 where the
-    centre is masked."""
+    centre is masked. ``m`` is the (H, W) mask or one all-True row."""
     h, w = n.shape[:2]
     for r in prange(h):
         r = np.int64(r)
         up, dn = r > 0, r < h - 1
+        u, mid, lo = n[r - 1 if up else r], n[r], n[r + 1 if dn else r]
+        if m.shape[0] > 1:
+            mu, mm, ml = m[r - 1 if up else r], m[r], m[r + 1 if dn else r]
+        else:
+            mu, mm, ml = m[0], m[0], m[0]
         for c in range(w):
-            if not _nvalid(n, m, masked, r, c):
-                out[r, c] = 1.0
-                continue
+            x0, x1, x2 = mid[c, 0], mid[c, 1], mid[c, 2]
             lf, rt = c > 0, c < w - 1
-            ah = _ndot(n, m, masked, r - 1, c - 1, up and lf, r + 1, c + 1, dn and rt, r, c)
-            cf = _ndot(n, m, masked, r - 1, c + 1, up and rt, r + 1, c - 1, dn and lf, r, c)
-            out[r, c] = min(1.0, max(-1.0, 0.5 * (ah + cf)))
+            cl = c - 1 if lf else c
+            cr = c + 1 if rt else c
+            ah = _ndot_pair(u, mu, cl, lo, ml, cr, up and lf, dn and rt, x0, x1, x2)
+            cf = _ndot_pair(u, mu, cr, lo, ml, cl, up and rt, dn and lf, x0, x1, x2)
+            v = min(np.float32(1.0), max(np.float32(-1.0), np.float32(0.5) * (ah + cf)))
+            out[r, c] = v if _nrow_ok(mid, mm, c) else np.float32(1.0)

@@ -217,5 +217,5 @@ def diagonal_normal_discontinuity(
     n = np.ascontiguousarray(n, dtype=np.float32)
     m = _mask(mask, n.shape[:2])
     out = np.empty(n.shape[:2], dtype=np.float32)
-    _stencil.diag_normal(n, m if m is not None else np.ones((1, 1), np.bool_), m is not None, out)
+    _stencil.diag_normal(n, m if m is not None else np.ones((1, n.shape[1]), np.bool_), out)
     return out
