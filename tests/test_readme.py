@@ -13,12 +13,17 @@ def test_readme_python_example_runs(tmp_path, monkeypatch):
     blocks = re.findall(r"```python\n(.*?)```", text, flags=re.S)
     assert blocks
     monkeypatch.chdir(tmp_path)
+    spaces = []
     for code in blocks:
         namespace: dict[str, object] = {}
         exec(compile(code, "README.md", "exec"), namespace)
-    g = namespace["g"]
+        spaces.append(namespace)
+    g = spaces[0]["g"]
     assert g.shape == (1200, 1600) and "Elevation" in g.scalars
     assert (tmp_path / "nut.npz").is_file()
+    edges = spaces[1]
+    assert edges["picture"].shape == (768, 1024, 3)
+    assert edges["profile"].max() == 1.0 and edges["inner"].max() > 0.5
 
 
 def test_quick_start_has_two_commands_and_ci_runs_the_test_one():
