@@ -124,7 +124,7 @@ def _section_turn(depth, r0, c0, r1, c1, r2, c2, r3, c3, h, w, parallel, inv_d, 
 
 
 @njit(inline="always", cache=True)
-def _depth_crease(sz, depth, m, r, c, dr, dc, h, w, parallel, inv_d, inv_w, jump):
+def _depth_crease(sz, depth, m, r, c, dr, dc, h, w, parallel, inv_d, inv_w, jump, cos_min):
     """Signed 1st-order discontinuity of the depth between X = (r, c) and Y = X + d, degrees.
 
     The surface's section through the four pixels X - d, X, Y, Y + d (eye-space positions
@@ -132,14 +132,25 @@ def _depth_crease(sz, depth, m, r, c, dr, dc, h, w, parallel, inv_d, inv_w, jump
     that is exact for two planes meeting anywhere between X and Y. Non-maximum suppression
     against the neighbouring pairs keeps the one pair that straddles the crease, so the line
     is one pixel wide, and the flanks on either side must be nearly straight. The sign is
-    that of the change of ``sz`` slope: a projective map keeps
-    convexity, and ``sz`` is affine on planes, so a convex edge has ``s_right < s_left``.
-    Returns 0 when a pixel of the stencil is missing or across a depth discontinuity.
+    that of the change of ``sz`` slope: a projective map keeps convexity, and ``sz`` is affine
+    on planes, so a convex edge has ``s_right < s_left``. Returns 0 when a pixel of the
+    stencil is missing or across a depth discontinuity, and (early, as most pairs are) when
+    the turn's cosine is at least ``cos_min``: such a turn could not reach the threshold.
     """
     rm, cm = r - dr, c - dc
     r2, c2 = r + dr, c + dc
     rp, cp = r2 + dr, c2 + dc
     if not (_valid(sz, m, rm, cm) and _valid(sz, m, rp, cp)):
+        return 0.0
+    x0, y0, z0 = _eye(depth, rm, cm, h, w, parallel, inv_d, inv_w)
+    x1, y1, z1 = _eye(depth, r, c, h, w, parallel, inv_d, inv_w)
+    x2, y2, z2 = _eye(depth, r2, c2, h, w, parallel, inv_d, inv_w)
+    x3, y3, z3 = _eye(depth, rp, cp, h, w, parallel, inv_d, inv_w)
+    ax, ay, az = x1 - x0, y1 - y0, z1 - z0
+    bx, by, bz = x3 - x2, y3 - y2, z3 - z2
+    dot = ax * bx + ay * by + az * bz
+    norms = math.sqrt((ax * ax + ay * ay + az * az) * (bx * bx + by * by + bz * bz))
+    if dot >= cos_min * norms:
         return 0.0
     if _pair_gap(sz, depth, m, rm, cm, dr, dc, 1, parallel, inv_d) > jump:
         return 0.0
@@ -149,7 +160,7 @@ def _depth_crease(sz, depth, m, r, c, dr, dc, h, w, parallel, inv_d, inv_w, jump
     rpp, cpp = rp + dr, cp + dc
     if not (_valid(sz, m, rmm, cmm) and _valid(sz, m, rpp, cpp)):
         return 0.0
-    ang = _section_turn(depth, rm, cm, r, c, r2, c2, rp, cp, h, w, parallel, inv_d, inv_w)
+    ang = _turn(ax, ay, az, bx, by, bz)
     left = _section_turn(depth, rmm, cmm, rm, cm, r, c, r2, c2, h, w, parallel, inv_d, inv_w)
     right = _section_turn(depth, r, c, r2, c2, rp, cp, rpp, cpp, h, w, parallel, inv_d, inv_w)
     if ang < left or ang <= right:
@@ -167,7 +178,19 @@ def _depth_crease(sz, depth, m, r, c, dr, dc, h, w, parallel, inv_d, inv_w, jump
 
 @njit(parallel=True, cache=True)
 def pair_edge_kernel(
-    sz, depth, normal, m, parallel, inv_d, inv_w, jump, crease, soft, profile_out, crease_out
+    sz,
+    depth,
+    normal,
+    m,
+    parallel,
+    inv_d,
+    inv_w,
+    jump,
+    crease,
+    soft,
+    do_crease,
+    profile_out,
+    crease_out,
 ):
     """Profile ink on the nearer pixel of each 4-neighbour pair with an unexplained jump
     (the covered pixel next to the background counts as an infinite jump), and signed crease
@@ -176,6 +199,7 @@ def pair_edge_kernel(
     the buffer's normals and the depth's own section angle (:func:`_depth_crease`), so data
     with normals smoothed across a real crease still shows it."""
     h, w = sz.shape
+    cos_min = math.cos(math.radians(crease))
     for r in prange(h):
         r = np.int64(r)
         for c in range(w):
@@ -196,9 +220,11 @@ def pair_edge_kernel(
                 gap = _pair_gap(sz, depth, m, r, c, dr, dc, 1, parallel, inv_d)
                 if sz[r, c] > sz[r2, c2]:
                     prof = max(prof, _ramp(gap, jump, jump))
-                if k == 1 or k == 3 or gap > jump:
+                if k == 1 or k == 3 or gap > jump or not do_crease:
                     continue
-                geo = _depth_crease(sz, depth, m, r, c, dr, dc, h, w, parallel, inv_d, inv_w, jump)
+                geo = _depth_crease(
+                    sz, depth, m, r, c, dr, dc, h, w, parallel, inv_d, inv_w, jump, cos_min
+                )
                 ang = _angle(normal, r, c, r2, c2)
                 if ang > abs(geo):
                     # Convex iff (nY - nX) . (PY - PX) > 0 (monotone normal map).

@@ -70,7 +70,7 @@ def _camera_terms(gb: GBuffer) -> tuple[bool, float, float]:
     return bool(cam.parallel_projection), 1.0 / cam.distance, 1.0 / cam.pixel_size
 
 
-def _pair_edges(gb: GBuffer, depth_jump: float, crease_angle: float):
+def _pair_edges(gb: GBuffer, depth_jump: float, crease_angle: float, creases: bool = True):
     parallel, inv_d, inv_w = _camera_terms(gb)
     h, w = gb.shape
     profile = np.empty((h, w), dtype=np.float32)
@@ -86,6 +86,7 @@ def _pair_edges(gb: GBuffer, depth_jump: float, crease_angle: float):
         float(depth_jump),
         float(crease_angle),
         0.5 * float(crease_angle),
+        bool(creases),
         profile,
         crease,
     )
@@ -134,7 +135,7 @@ def profile_edges(
     """
     gb = _check_gbuffer(gb)
     _check_params(depth_jump, DEFAULT_CREASE_ANGLE, width)
-    profile, _ = _pair_edges(gb, depth_jump, DEFAULT_CREASE_ANGLE)
+    profile, _ = _pair_edges(gb, depth_jump, DEFAULT_CREASE_ANGLE, creases=False)
     return _finish(gb, profile, width)
 
 
