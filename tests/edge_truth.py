@@ -276,8 +276,8 @@ def _bin_triangles(tri_px: np.ndarray, width: int, height: int, n_samples: int):
     """Bucket projected triangles (m, 3, 2) by pixel tiles; the tile size minimises a cost
     estimate (bucket entries + expected ray-triangle tests). Returns (tile size, tiles across,
     tile_start, tile_tris) in CSR form."""
-    lo = np.floor(np.nanmin(tri_px, axis=1) - 0.01)
-    hi = np.floor(np.nanmax(tri_px, axis=1) + 0.01)
+    lo = np.floor(tri_px.min(axis=1) - 0.01)
+    hi = np.floor(tri_px.max(axis=1) + 0.01)
     lo = np.clip(lo, 0, [width - 1, height - 1]).astype(np.int64)
     hi = np.clip(hi, -1, [width - 1, height - 1]).astype(np.int64)
     ok = np.all(hi >= lo, axis=1)
@@ -409,9 +409,8 @@ def visible_edge_truth(
     col = np.floor(px[:, 0]).astype(np.int64)
     row = np.floor(px[:, 1]).astype(np.int64)
     inside = (col >= 0) & (col < width) & (row >= 0) & (row < height)
-    sample, px, col, row, sflags = sample[inside], px[inside], col[inside], row[inside], (
-        flags[edge_of[inside]]
-    )
+    sample, col, row = sample[inside], col[inside], row[inside]
+    sflags = flags[edge_of[inside]]
     if sample.shape[0] == 0:
         return out
 
@@ -433,9 +432,8 @@ def visible_edge_truth(
     tri_w = hom[triangles, 3]
     front = np.all(tri_w > 0.0, axis=1)
     crossing = ~front & np.any(tri_w > 0.0, axis=1)
-    tri_px = np.full((triangles.shape[0], 3, 2), np.nan)
+    tri_px = np.full((triangles.shape[0], 3, 2), -1e9)  # an empty box: never bucketed
     tri_px[front] = _to_pixels(hom[triangles[front]], width, height)
-    tri_px[~front] = -1e9  # empty box: never bucketed
     size, nx, tile_start, tile_tris = _bin_triangles(tri_px, width, height, sample.shape[0])
     tile = (row // size) * nx + col // size
     v = points[triangles]
