@@ -2,15 +2,18 @@
 
 Two scenes: PyVista's nut (iso view) and the Jacksboro fault DEM seen bird's-eye from the
 south-east. Every channel of each G-buffer is written as a PNG, with a titled montage of all of
-them, and ``index.html`` shows them with a caption, the camera and the timings.
+them. Then the edge figures of Saito & Takahashi (1990) on the nut: Fig. 3 (edge drawing from
+the depth image) and Fig. 7 (edge enhancement, with the 2003 edge map). ``index.html`` shows
+every image with a caption, the camera and the timings.
 """
 
 from __future__ import annotations
 
 import html
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -21,6 +24,8 @@ from .datasets import load_jacksboro_terrain, load_nut
 from .errors import InputError
 from .filters import lambert
 from .gbuffer import GBuffer
+from .recipes import CAPTIONS as EDGE_CAPTIONS
+from .recipes import fig3_panels, fig7_panels, framed_camera, nut_camera
 
 __all__ = ["run_demo", "terrain_birdseye_camera"]
 
@@ -101,26 +106,11 @@ def terrain_birdseye_camera(
     """
     if not 0.0 < elevation < 90.0:
         raise InputError(f"elevation: expected degrees in (0, 90), got {elevation!r}")
-    lo = np.asarray(bounds[0::2], dtype=np.float64)
-    hi = np.asarray(bounds[1::2], dtype=np.float64)
-    centre = (lo + hi) / 2
     az, el = np.radians(azimuth), np.radians(elevation)
-    to_eye = np.array([np.sin(az) * np.cos(el), np.cos(az) * np.cos(el), np.sin(el)])
-    right = np.cross(-to_eye, (0.0, 0.0, 1.0))
-    right /= np.linalg.norm(right)
-    up = np.cross(right, -to_eye)
-    corners = np.array(np.meshgrid(*np.stack([lo, hi], axis=1))).reshape(3, -1).T - centre
-    tan_v = np.tan(np.radians(view_angle) / 2) * (1.0 - margin)
-    tan_h = tan_v * aspect
-    # A corner at lateral offset r and height t towards the eye is in view once the eye is
-    # farther than t + |r| / tan(half field of view) from the focal plane.
-    toward = corners @ to_eye
-    distance = max(
-        np.max(toward + np.abs(corners @ right) / tan_h),
-        np.max(toward + np.abs(corners @ up) / tan_v),
+    to_eye = (np.sin(az) * np.cos(el), np.cos(az) * np.cos(el), np.sin(el))
+    return framed_camera(
+        bounds, to_eye, (0.0, 0.0, 1.0), view_angle=view_angle, aspect=aspect, margin=margin
     )
-    position = centre + distance * to_eye
-    return tuple(position.tolist()), tuple(centre.tolist()), (0.0, 0.0, 1.0)
 
 
 def _scenes(aspect: float) -> list[_Scene]:
@@ -202,6 +192,73 @@ def _write_scene(
     scene.gbuffer = g
 
 
+@dataclass
+class _EdgeFigure:
+    """One edge figure of the paper, made from its own capture of the nut."""
+
+    name: str
+    title: str
+    intro: str
+    supersample: int
+    panels: Callable[[GBuffer], list[tuple[str, str, np.ndarray]]]
+    # Filled in by _write_edge_figure, read by _write_index.
+    images: list[tuple[str, Path]] = field(default_factory=list)
+    timings: dict[str, float] = field(default_factory=dict)
+    gbuffer: GBuffer | None = None
+
+
+def _edge_figures() -> list[_EdgeFigure]:
+    return [
+        _EdgeFigure(
+            "fig3",
+            "Edges: Saito & Takahashi 1990 Fig. 3, edge drawing on the machine nut",
+            "The paper's literal operators on the sz image (Eq. 1-4, k_g = 10, k_l = 2; the "
+            "background is sz = 0, infinitely far), then the robust profile_edges and "
+            "internal_edges. No supersampling: the operators work on single pixels.",
+            1,
+            fig3_panels,
+        ),
+        _EdgeFigure(
+            "fig7",
+            "Edges: Saito & Takahashi 1990 Fig. 7, edge enhancement (and the 2003 edge map)",
+            "A shaded image enhanced with white convex edges and black concave edges and "
+            "profiles; then with black lines only; then with the RGBA edge map of Nienhaus & "
+            "Döllner 2003. Captured 3x supersampled, lines 1.5 pixels wide, antialiased.",
+            3,
+            partial(fig7_panels, width=1.5),
+        ),
+    ]
+
+
+def _write_edge_figure(
+    fig: _EdgeFigure, outdir: Path, window_size: tuple[int, int], progress_bar: bool
+) -> None:
+    t0 = time.perf_counter()
+    nut = load_nut()
+    g = capture(
+        nut,
+        window_size=window_size,
+        camera=nut_camera(nut.bounds, aspect=window_size[0] / window_size[1]),
+        supersample=fig.supersample,
+        progress_bar=progress_bar,
+    )
+    t1 = time.perf_counter()
+    panels = fig.panels(g)
+    t2 = time.perf_counter()
+    for key, _, image in panels:
+        path = write_png(outdir / f"{fig.name}_{key}.png", image)
+        fig.images.append((EDGE_CAPTIONS[key], path))
+    tiles = [(title, image) for _, title, image in panels]
+    path = write_png(outdir / f"{fig.name}_montage.png", montage(tiles, columns=4))
+    fig.images.append(("montage: all panels above, titled as in the paper", path))
+    fig.timings = {
+        "capture": t1 - t0,
+        "edge filters": t2 - t1,
+        "PNG images": time.perf_counter() - t2,
+    }
+    fig.gbuffer = g
+
+
 def _camera_text(g: GBuffer) -> list[str]:
     c = g.camera
 
@@ -237,20 +294,35 @@ def _scene_html(scene: _Scene) -> str:
     timing = ", ".join(f"{k} {v:.2f} s" for k, v in scene.timings.items())
     parts.append(f"<p>Timings: {esc(timing)}</p>")
     parts.append(f'<p>G-buffer: <a href="{esc(npz)}">{esc(npz)}</a> (GBuffer.load)</p>')
-    for caption, path in scene.images:
-        parts.append(
-            f'<figure><figcaption>{esc(caption)}</figcaption><img src="{esc(path.name)}" '
-            f'alt="{esc(caption)}"></figure>'
-        )
-    return "\n".join(parts)
+    return "\n".join(parts + _figures_html(scene.images))
 
 
-def _write_index(scenes: list[_Scene], outdir: Path) -> Path:
-    body = "\n".join(_scene_html(s) for s in scenes)
+def _figures_html(images: list[tuple[str, Path]]) -> list[str]:
+    esc = html.escape
+    return [
+        f'<figure><figcaption>{esc(caption)}</figcaption><img src="{esc(path.name)}" '
+        f'alt="{esc(caption)}"></figure>'
+        for caption, path in images
+    ]
+
+
+def _edge_html(fig: _EdgeFigure) -> str:
+    assert fig.gbuffer is not None
+    esc = html.escape
+    parts = [f"<h2>{esc(fig.title)}</h2>", f"<p>{esc(fig.intro)}</p>"]
+    parts.append(f"<p>{esc(repr(fig.gbuffer))}</p><p>Camera: ")
+    parts.append("<br>".join(esc(line) for line in _camera_text(fig.gbuffer)) + "</p>")
+    timing = ", ".join(f"{k} {v:.2f} s" for k, v in fig.timings.items())
+    parts.append(f"<p>Timings: {esc(timing)}</p>")
+    return "\n".join(parts + _figures_html(fig.images))
+
+
+def _write_index(scenes: list[_Scene], figures: list[_EdgeFigure], outdir: Path) -> Path:
+    body = "\n".join([_scene_html(s) for s in scenes] + [_edge_html(f) for f in figures])
     page = (
         '<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
         f"<title>sciviz_gbuf demo</title><style>{_STYLE}</style></head><body>\n"
-        "<h1>sciviz_gbuf demo: G-buffers of bundled sample data</h1>\n"
+        "<h1>sciviz_gbuf demo: G-buffers and edges of bundled sample data</h1>\n"
         f"{body}\n</body></html>\n"
     )
     path = outdir / "index.html"
@@ -264,7 +336,7 @@ def run_demo(
     window_size: tuple[int, int] = (800, 600),
     progress_bar: bool = False,
 ) -> list[Path]:
-    """Capture the sample scenes and write their channels, G-buffers and a gallery page.
+    """Capture the sample scenes, write their channels, G-buffers, edge figures and a gallery page.
 
     Parameters
     ----------
@@ -279,7 +351,8 @@ def run_demo(
     -------
     list of pathlib.Path
         Every file written: per scene one PNG per channel, a montage PNG and the G-buffer
-        ``.npz``; finally ``index.html``.
+        ``.npz``; then one PNG per panel of the 1990 Fig. 3 and Fig. 7 edge figures with a
+        montage each; finally ``index.html``.
     """
     width, height = _check_window_size(window_size)
     out = Path(outdir)
@@ -287,4 +360,8 @@ def run_demo(
     scenes = _scenes(width / height)
     for scene in scenes:
         _write_scene(scene, out, (width, height), progress_bar)
-    return [p for s in scenes for p in s.files] + [_write_index(scenes, out)]
+    figures = _edge_figures()
+    for fig in figures:
+        _write_edge_figure(fig, out, (width, height), progress_bar)
+    files = [p for s in scenes for p in s.files] + [p for f in figures for _, p in f.images]
+    return [*files, _write_index(scenes, figures, out)]

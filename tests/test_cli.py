@@ -7,6 +7,8 @@ import sys
 
 import numpy as np
 import pytest
+import pyvista as pv
+from PIL import Image
 
 import sciviz_gbuf as sg
 from sciviz_gbuf.cli import main
@@ -67,3 +69,129 @@ def test_read_mesh_returns_the_points(shared_data):
     m = read_mesh(shared_data / "meshes" / "vtkdata_42400-IDGH.stl")
     assert m.n_cells == 11036
     assert np.isfinite(np.asarray(m.points)).all()
+
+
+# ---------------------------------------------------------------------------- edges
+def _png(path):
+    with Image.open(path) as im:
+        return im.mode, im.size, np.asarray(im)
+
+
+def test_edges_on_the_cad_part(shared_data, tmp_path, capsys):
+    stl = shared_data / "meshes" / "vtkdata_42400-IDGH.stl"
+    before = stl.read_bytes()
+    out = tmp_path / "part.png"
+    assert main(["edges", str(stl), "-o", str(out), "--size", "320x240"]) == 0
+    assert "wrote" in capsys.readouterr().out
+    mode, size, px = _png(out)
+    assert (mode, size) == ("RGB", (320, 240))
+    grey = px.mean(axis=2)
+    assert (grey == 255).mean() > 0.3  # white paper around the part
+    assert (grey < 40).sum() > 200  # black profile lines
+    assert len(np.unique(grey)) > 50  # and a shade in between
+    assert stl.read_bytes() == before
+
+
+@pytest.mark.parametrize(
+    ("suffix", "options", "mode"),
+    [
+        (".vtp", [], "RGB"),
+        (".vtp", ["--style", "fig7", "--operator", "c1", "--width", "1.5"], "RGB"),
+        (".ply", ["--style", "lines", "--view", "xz", "--parallel", "--supersample", "1"], "RGB"),
+        (".ply", ["--style", "edgemap", "--crease-angle", "20", "--depth-jump", "2"], "RGBA"),
+    ],
+)
+def test_edges_on_written_meshes(tmp_path, suffix, options, mode):
+    mesh = (
+        pv.Cube(x_length=2.0, y_length=1.0, z_length=0.5)
+        .triangulate()
+        .merge(pv.Sphere(radius=0.4, center=(0.0, 0.0, 0.6)))
+    )
+    path = tmp_path / f"shape{suffix}"
+    mesh.save(path)
+    out = tmp_path / "shape.png"
+    assert main(["edges", str(path), "-o", str(out), "--size", "200x150", *options]) == 0
+    got_mode, size, px = _png(out)
+    assert (got_mode, size) == (mode, (200, 150))
+    if mode == "RGBA":  # the edge map: profile in alpha, inner edges (the cube's) in RGB
+        assert px[..., 3].max() == 255 and px[..., 0].max() == 255
+        assert (px[..., 3] == 0).mean() > 0.5
+    else:
+        assert len(np.unique(px)) > 2
+
+
+def test_edges_lines_follow_the_sphere_silhouette(tmp_path):
+    """Black lines on white: ink on the projected outline of a sphere and nowhere else."""
+    centre, radius = np.array([0.3, -0.2, 0.5]), 1.0
+    sphere = pv.Sphere(radius=radius, center=centre, theta_resolution=96, phi_resolution=96)
+    path = tmp_path / "sphere.ply"
+    sphere.save(path)
+    w, h = 240, 200
+    out = tmp_path / "sphere.png"
+    args = ["edges", str(path), "-o", str(out), "--size", f"{w}x{h}", "--view", "xy"]
+    assert main([*args, "--parallel", "--style", "lines"]) == 0
+    _, size, px = _png(out)
+    assert size == (w, h)
+    ink = 1.0 - px.astype(float).mean(axis=2) / 255.0
+    # The camera of that view (fitted to the bounds, looking down -z at their centre): the
+    # sphere's outline is a circle about the image centre, radius R / (2 parallel_scale / h).
+    cam = sg.capture(sphere, window_size=(w, h), camera="xy", parallel_projection=True).camera
+    assert np.allclose(cam.focal_point, centre, atol=1e-6)
+    r_px = radius * h / (2.0 * cam.parallel_scale)
+    assert 40 < r_px < 100
+    rows, cols = np.mgrid[:h, :w]
+    dist = np.hypot(cols + 0.5 - w / 2, rows + 0.5 - h / 2)
+    # (an antialiased line one output pixel wide may fall on two pixels with half the ink each)
+    lines = ink >= 0.45
+    assert np.abs(dist[ink > 0.1] - r_px).max() <= 1.5
+    assert ink[np.abs(dist - r_px) > 2.0].max() < 0.05  # no facet or other lines anywhere else
+    # and the outline is closed: ink in every 5 degree sector
+    angles = np.degrees(np.arctan2(rows + 0.5 - h / 2, cols + 0.5 - w / 2))[lines]
+    assert len(np.unique(np.floor((angles + 180) / 5))) == 72
+
+
+@pytest.mark.parametrize(
+    ("options", "word"),
+    [
+        (["--size", "12by4"], "--size"),
+        (["--size", "0x100"], "--size"),
+        (["--width", "0.5"], "--width"),
+        (["--width", "wide"], "--width"),
+        (["--crease-angle", "200"], "--crease-angle"),
+        (["--crease-angle", "nan"], "--crease-angle"),
+        (["--depth-jump", "-1"], "--depth-jump"),
+        (["--supersample", "0"], "--supersample"),
+        (["--supersample", "1.5"], "--supersample"),
+        (["--view", "top"], "--view"),
+        (["--style", "sketch"], "--style"),
+        (["--operator", "sobel"], "--operator"),
+    ],
+)
+def test_edges_bad_options_exit_2(tmp_path, capsys, options, word):
+    mesh = tmp_path / "cube.vtp"
+    pv.Cube().save(mesh)
+    with pytest.raises(SystemExit) as info:
+        main(["edges", str(mesh), "-o", str(tmp_path / "x.png"), *options])
+    assert info.value.code == 2
+    assert word in capsys.readouterr().err
+    assert not (tmp_path / "x.png").exists()
+
+
+def test_edges_bad_files_exit_2(tmp_path, capsys):
+    out = str(tmp_path / "x.png")
+    assert main(["edges", str(tmp_path / "none.stl"), "-o", out]) == 2
+    assert "none.stl: no such mesh file" in capsys.readouterr().err
+    bad = tmp_path / "bad.stl"
+    bad.write_text("solid nothing\nendsolid nothing\n")
+    assert main(["edges", str(bad), "-o", out]) == 2
+    assert "bad.stl" in capsys.readouterr().err
+    mesh = tmp_path / "cube.vtp"
+    pv.Cube().save(mesh)
+    assert main(["edges", str(mesh), "-o", str(tmp_path / "x.jpg")]) == 2
+    assert "--output" in capsys.readouterr().err
+    assert main(["edges", str(mesh), "-o", str(tmp_path / "no" / "x.png")]) == 2
+    assert "--output" in capsys.readouterr().err
+    too_big = ["--size", "9000x100", "--supersample", "2"]
+    assert main(["edges", str(mesh), "-o", out, *too_big]) == 2
+    assert "supersample" in capsys.readouterr().err
+    assert not (tmp_path / "x.png").exists()

@@ -268,7 +268,9 @@ def test_run_demo_files(demo):
     assert files[-1] == outdir / "index.html"
     assert sorted(files) == sorted(outdir.iterdir())  # nothing written beside them
     pngs = [p for p in files if p.suffix == ".png"]
-    assert len(pngs) == 2 * 11 + 1  # 9 channels + shade + montage per scene, + terrain elevation
+    # per scene 9 channels + shade + montage, + terrain elevation; then the edge figures:
+    # Fig. 3 (7 panels + montage) and Fig. 7 (8 panels + montage)
+    assert len(pngs) == 2 * 11 + 1 + 8 + 9
     for p in files:
         assert p.is_file() and p.stat().st_size > 0
     for p in pngs:
@@ -305,3 +307,28 @@ def test_run_demo_rejects_bad_window(tmp_path):
     with pytest.raises(InputError, match="window_size"):
         run_demo(tmp_path / "out", window_size=(0, 10))
     assert not (tmp_path / "out").exists()
+
+
+def test_run_demo_edge_figures(demo):
+    outdir, files = demo
+    names = {p.name for p in files}
+    for key in ("depth", "gradient", "second_order", "profile", "internal"):
+        assert f"fig3_{key}.png" in names
+    for key in ("a_shaded", "c_edges", "d_enhanced", "c2_edges", "d2_enhanced", "edgemap_c1"):
+        assert f"fig7_{key}.png" in names
+    page = (outdir / "index.html").read_text(encoding="utf-8")
+    assert "Fig. 3" in page and "Fig. 7" in page
+    assert page.count("Timings:") == 4
+
+    def grey(name):
+        with Image.open(outdir / name) as im:
+            return np.asarray(im.convert("L")).astype(int)
+
+    # Fig. 7 (c): mid-grey paper with white (convex) and black (concave, profile) lines
+    c = grey("fig7_c_edges.png")
+    assert np.median(c) in (127, 128) and c.max() == 255 and c.min() == 0
+    # (c'): black lines only
+    assert grey("fig7_c2_edges.png").max() <= 128
+    # the literal profile image (Eq. 3) draws the outline of the nut: black ink on white
+    prof = grey("fig3_profile.png")
+    assert prof.min() == 0 and np.median(prof) == 255

@@ -1,0 +1,150 @@
+"""Shaded + edge illustrations of a G-buffer: the styles of the ``sciviz-gbuf edges`` command.
+
+Every image is at the G-buffer's output size (``gb.output_shape``); with ``supersample > 1`` the
+shade and the lines are averaged from the larger buffer, so silhouettes and lines are
+antialiased. Background pixels are white paper.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from ..errors import InputError
+from ..filters import (
+    crease_edges,
+    edge_map,
+    enhance,
+    internal_edges,
+    lambert,
+    profile_edges,
+)
+from ..gbuffer import GBuffer
+
+__all__ = [
+    "LIGHT",
+    "STYLES",
+    "edges_to_map",
+    "fig7_edge_map",
+    "illustrate",
+    "shade_image",
+    "signed_to_grey",
+]
+
+#: Eye-space light from the upper left, as in hand-drawn illustrations.
+LIGHT = (-0.4, 0.5, 0.77)
+#: Styles of :func:`illustrate`, with a one-line description each.
+STYLES = {
+    "enhance": "shaded, white inner edges, black profiles (2003 edge map)",
+    "lines": "black profile and crease lines on white paper",
+    "fig7": "shaded, convex edges white, concave edges and profiles black (1990 Fig. 7)",
+    "edgemap": "the RGBA edge map itself: RGB inner-edge intensity, alpha profile (2003)",
+}
+
+
+def shade_image(
+    gb: GBuffer,
+    *,
+    light: Sequence[float] = LIGHT,
+    ambient: float = 0.2,
+    highlight: float = 0.85,
+) -> np.ndarray:
+    """Lambert shade of the G-buffer's normals on white paper, at the output size.
+
+    ``highlight * (ambient + (1 - ambient) max(0, N.L))``: the brightest surface stays below
+    white (``highlight``) so that white edge highlights remain visible on it.
+
+    Returns
+    -------
+    (H, W) float32 in [0, 1]; 1 (paper) on the background, blended at the silhouette.
+    """
+    if not 0.0 < highlight <= 1.0:
+        raise InputError(f"highlight: expected a value in (0, 1], got {highlight!r}")
+    shade = lambert(gb.normal, light=light, ambient=ambient)
+    shade = np.where(gb.mask, np.float32(highlight) * shade, np.float32(1.0))
+    return np.clip(gb.downsample(shade), 0.0, 1.0).astype(np.float32, copy=False)
+
+
+def signed_to_grey(values: np.ndarray, *, scale: float = 1.0) -> np.ndarray:
+    """Diverging grey of a signed image: 0 mid grey, ``+scale`` and above white, ``-scale`` black.
+
+    NaN (background) is mid grey too.
+    """
+    if not (np.isfinite(scale) and scale > 0):
+        raise InputError(f"scale: expected a finite number > 0, got {scale!r}")
+    v = np.nan_to_num(np.asarray(values, dtype=np.float32), nan=0.0)
+    return (0.5 + 0.5 * np.clip(v / np.float32(scale), -1.0, 1.0)).astype(np.float32)
+
+
+def fig7_edge_map(
+    gb: GBuffer,
+    *,
+    crease_angle: float = 30.0,
+    depth_jump: float = 1.0,
+    width: float = 1.0,
+    black_only: bool = False,
+) -> np.ndarray:
+    """The 1990 Fig. 7 edge image as an RGBA map for :func:`~sciviz_gbuf.filters.enhance`.
+
+    RGB: convex internal edges (to be drawn white); A: concave internal edges and profiles (to
+    be drawn black). ``black_only``: all internal edges in A (Fig. 7 (c'), absolute values).
+    """
+    inner = internal_edges(gb, crease_angle=crease_angle, depth_jump=depth_jump, width=width)
+    prof = profile_edges(gb, depth_jump=depth_jump, width=width)
+    return edges_to_map(inner, prof, black_only=black_only)
+
+
+def edges_to_map(inner: np.ndarray, profile: np.ndarray, *, black_only: bool = False):
+    """RGBA edge map of signed internal edges and profile ink (see :func:`fig7_edge_map`)."""
+    if black_only:
+        white, black = np.zeros_like(inner), np.maximum(profile, np.abs(inner))
+    else:
+        white, black = np.maximum(inner, 0.0), np.maximum(profile, np.maximum(-inner, 0.0))
+    return np.stack([white, white, white, black], axis=-1).astype(np.float32)
+
+
+def illustrate(
+    gb: GBuffer,
+    *,
+    style: str = "enhance",
+    operator: str = "diagonal",
+    crease_angle: float = 30.0,
+    depth_jump: float = 1.0,
+    width: float = 1.0,
+    light: Sequence[float] = LIGHT,
+) -> np.ndarray:
+    """One illustration of a G-buffer in one of :data:`STYLES`.
+
+    Parameters
+    ----------
+    gb : GBuffer
+    style : {"enhance", "lines", "fig7", "edgemap"}, default: "enhance"
+        See :data:`STYLES`.
+    operator : {"diagonal", "c1"}, default: "diagonal"
+        The 2003 edge-map operator (styles ``enhance`` and ``edgemap``; the other styles use
+        the pair-wise profile and internal edges of :mod:`sciviz_gbuf.filters`).
+    crease_angle, depth_jump, width
+        As in :func:`sciviz_gbuf.filters.internal_edges` (degrees, pixel footprints, output
+        pixels).
+    light : 3 floats
+        Eye-space direction towards the light of the shade.
+
+    Returns
+    -------
+    (H, W, 3) float32 RGB in [0, 1]; ``edgemap``: (H, W, 4) RGBA.
+    """
+    if style not in STYLES:
+        raise InputError(f"style: expected one of {sorted(STYLES)}, got {style!r}")
+    opts = {"crease_angle": crease_angle, "depth_jump": depth_jump, "width": width}
+    if style in ("enhance", "edgemap"):
+        emap = edge_map(gb, operator=operator, **opts)
+        if style == "edgemap":
+            return emap
+        return enhance(shade_image(gb, light=light), emap)
+    if style == "lines":
+        ink = np.maximum(
+            profile_edges(gb, depth_jump=depth_jump, width=width), crease_edges(gb, **opts)
+        )
+        return np.repeat((1.0 - ink)[..., None], 3, axis=2).astype(np.float32)
+    return enhance(shade_image(gb, light=light), fig7_edge_map(gb, **opts))
