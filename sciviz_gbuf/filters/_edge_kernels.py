@@ -113,7 +113,7 @@ def _turn(ax, ay, az, bx, by, bz):
     return math.degrees(math.atan2(cross, dot))
 
 
-@njit(inline="always", cache=True)
+@njit(cache=True)
 def _section_turn(depth, r0, c0, r1, c1, r2, c2, r3, c3, h, w, parallel, inv_d, inv_w):
     """Angle between the eye-space segments P0 -> P1 and P2 -> P3."""
     x0, y0, z0 = _eye(depth, r0, c0, h, w, parallel, inv_d, inv_w)
@@ -123,7 +123,7 @@ def _section_turn(depth, r0, c0, r1, c1, r2, c2, r3, c3, h, w, parallel, inv_d, 
     return _turn(x1 - x0, y1 - y0, z1 - z0, x3 - x2, y3 - y2, z3 - z2)
 
 
-@njit(inline="always", cache=True)
+@njit(cache=True)
 def _depth_crease(sz, depth, m, r, c, dr, dc, h, w, parallel, inv_d, inv_w, jump, cos_min):
     """Signed 1st-order discontinuity of the depth between X = (r, c) and Y = X + d, degrees.
 
