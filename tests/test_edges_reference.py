@@ -126,7 +126,9 @@ class Ref:
             return min(1.0, total / 4)
         iz = 1.0
         for dc in (-1, 1):
-            j = 2 * self.pair_jump((r - 1, c + dc), (1, -dc), 2)
+            j = 2 * max(
+                self.pair_jump((r - 1, c + dc), (1, -dc), 1), self.pair_jump((r, c), (1, -dc), 1)
+            )
             iz *= (1 - j / 2) ** 2
         return 1 - iz
 

@@ -293,8 +293,9 @@ def edge_map_kernel(sz, depth, normal, m, parallel, inv_d, jump, crease, soft, u
 
     Inner: the 2003 diagonal pairs (A, H) and (C, F) around X, from the pair with the smaller
     cosine (the pair that crosses an edge running along a diagonal). Profile: the diagonal
-    ``1 - I_Z`` over the unexplained jumps of the same pairs scaled to [0, 2], or the C1 sum
-    over the 8 neighbours of X (``use_c1``) scaled so a straight step gives 1.
+    ``1 - I_Z`` with ``|A - H|`` the larger unexplained jump of A -> X and X -> H scaled to
+    [0, 2], or the C1 sum over the 8 neighbours of X (``use_c1``) scaled so a straight step
+    gives 1.
     """
     h, w = sz.shape
     for r in prange(h):
@@ -327,8 +328,13 @@ def edge_map_kernel(sz, depth, normal, m, parallel, inv_d, jump, crease, soft, u
             else:
                 iz = 1.0
                 for dc in (-1, 1):
-                    rr, cc = r - 1, c + dc  # A or C; its partner H or F is two steps away
-                    j = 2.0 * _pair_jump(sz, depth, m, rr, cc, 1, -dc, 2, parallel, inv_d, jump)
+                    # |A - H| (or |C - F|): a jump on either half of the diagonal through X.
+                    # Two one-pixel tests, not one two-pixel one: curved walls seen edge-on
+                    # bend within two pixels and would read as jumps.
+                    rr, cc = r - 1, c + dc  # A or C
+                    j1 = _pair_jump(sz, depth, m, rr, cc, 1, -dc, 1, parallel, inv_d, jump)
+                    j2 = _pair_jump(sz, depth, m, r, c, 1, -dc, 1, parallel, inv_d, jump)
+                    j = 2.0 * max(j1, j2)
                     s = 1.0 - 0.5 * j
                     iz *= s * s
                 prof = 1.0 - iz

@@ -1,10 +1,11 @@
 """Numba kernels of the 3x3 discontinuity operators (1990 Eq. 1-4, 9; 2003 §4.1.2).
 
 Border rule, shared by every kernel here: a neighbour that is outside the image, masked, or not
-finite takes the value of the centre pixel X. A coverage border therefore produces no response
-from these operators by itself (it neither creates nor hides an edge); the profile of an object
-against the background is drawn from the mask by :mod:`.edges`. Masked / non-finite centre
-pixels get the operator's neutral value.
+finite is replaced by the linear extrapolation ``2X - opposite neighbour`` (the opposite one
+across X), or by X itself when that one is missing too; the min/max operators (Eq. 3, 4) use X.
+A plane therefore gives the same response up to a coverage border as inside: the border neither
+creates nor hides an edge; the profile of an object against the background is drawn from the
+mask by :mod:`.edges`. Masked / non-finite centre pixels get the operator's neutral value.
 
 Rows run in parallel. Inside a row the interior columns take a branch-free path (selects only)
 that LLVM vectorises; the two border columns take the same code with their flags set. Each
@@ -26,6 +27,7 @@ _H = np.float32(0.5)
 _ONE = np.float32(1.0)
 _TWO = np.float32(2.0)
 _EIGHT_THIRDS = np.float32(8.0 / 3.0)
+_FMAX = np.float32(np.finfo(np.float32).max)
 
 
 @njit(inline="always", cache=True)
@@ -106,8 +108,20 @@ def _apply(code, x, a, b, c, d, e, f, g, h, k, aux):
 
 
 @njit(inline="always", cache=True)
-def _pick(v, mv, inside, x):
-    return v if (v - v == 0) & inside & mv else x  # finite, in the image and covered
+def _ok(v, mv, inside):
+    return (v - v == 0) & inside & mv  # finite, in the image and covered
+
+
+@njit(inline="always", cache=True)
+def _fill(v, ok, opp, ok_opp, x, extrapolate):
+    """A neighbour under the border rule: itself if valid; else the linear extrapolation
+    ``2X - opposite`` (so planes stay planes up to the border), else the centre value."""
+    if ok:
+        return v
+    if extrapolate and ok_opp:
+        e = x + (x - opp)
+        return min(max(e, -_FMAX), _FMAX)  # huge inputs: stay finite, never inf - inf
+    return x
 
 
 @njit(inline="always", cache=True)
@@ -118,14 +132,26 @@ def _pixel(code, neutral, u, mid, lo, mu, mm, ml, up, dn, c, cl, cr, lf, rt, k, 
     if code == SUPPRESS:
         ax = aux[c]
         okx = okx & (ax - ax == 0)
-    a = _pick(u[cl], mu[cl], up & lf, x)
-    b = _pick(u[c], mu[c], up, x)
-    cc = _pick(u[cr], mu[cr], up & rt, x)
-    d = _pick(mid[cl], mm[cl], lf, x)
-    e = _pick(mid[cr], mm[cr], rt, x)
-    f = _pick(lo[cl], ml[cl], dn & lf, x)
-    g = _pick(lo[c], ml[c], dn, x)
-    hh = _pick(lo[cr], ml[cr], dn & rt, x)
+    # Min/max (Eq. 3, 4) take the neighbourhood as it is; differentials extrapolate.
+    ext = code != NORMALIZE and code != SUPPRESS
+    a0, b0, c0, d0 = u[cl], u[c], u[cr], mid[cl]
+    e0, f0, g0, h0 = mid[cr], lo[cl], lo[c], lo[cr]
+    oka = _ok(a0, mu[cl], up & lf)
+    okb = _ok(b0, mu[c], up)
+    okc = _ok(c0, mu[cr], up & rt)
+    okd = _ok(d0, mm[cl], lf)
+    oke = _ok(e0, mm[cr], rt)
+    okf = _ok(f0, ml[cl], dn & lf)
+    okg = _ok(g0, ml[c], dn)
+    okh = _ok(h0, ml[cr], dn & rt)
+    a = _fill(a0, oka, h0, okh, x, ext)
+    b = _fill(b0, okb, g0, okg, x, ext)
+    cc = _fill(c0, okc, f0, okf, x, ext)
+    d = _fill(d0, okd, e0, oke, x, ext)
+    e = _fill(e0, oke, d0, okd, x, ext)
+    f = _fill(f0, okf, c0, okc, x, ext)
+    g = _fill(g0, okg, b0, okb, x, ext)
+    hh = _fill(h0, okh, a0, oka, x, ext)
     v = _apply(code, x, a, b, cc, d, e, f, g, hh, k, ax)
     out[c] = v if okx else neutral
 

@@ -222,10 +222,11 @@ def edge_map(
     operator : {"diagonal", "c1"}, default: "diagonal"
         ``"diagonal"``: the 2003 first variant over the diagonal pairs (A, H), (C, F). Inner
         intensity from the angle between their normals; profile ``1 - I_Z`` with
-        ``I_Z = (1 - |A-H|/2)^2 (1 - |C-F|/2)^2``, where ``|A-H|`` is the pair's unexplained
-        depth jump scaled so that ``2 * depth_jump`` footprints reach 2. ``"c1"``: the profile
-        from the C1 operator (1990 Eq. 9 / 2003 second variant) over the 8 neighbours with the
-        same jump measure, scaled so that a straight step gives 1; inner edges as above.
+        ``I_Z = (1 - |A-H|/2)^2 (1 - |C-F|/2)^2``, where ``|A-H|`` is the larger unexplained
+        depth jump of A -> X and X -> H, scaled so that ``2 * depth_jump`` footprints reach 2.
+        ``"c1"``: the profile from the C1 operator (1990 Eq. 9 / 2003 second variant) over
+        the 8 neighbours with the same jump measure, scaled so that a straight step gives 1;
+        inner edges as above.
         Both straddle the edge (lines about two pixels wide, softer than
         :func:`profile_edges`), as in the paper. Inner edges also include the creases the
         depth shows (see :func:`internal_edges`), for data whose normals are smoothed across

@@ -1,9 +1,13 @@
 """Discontinuity operators of Saito & Takahashi (1990 §3.1) and Nienhaus & Döllner (2003 §4.1.2).
 
 Every operator works on a float image with an optional coverage ``mask`` and follows one border
-rule: a neighbour that lies outside the image, is masked, or is not finite takes the centre
-pixel's value. So the background never creates an edge through these operators, and never hides
-one either (an edge between two covered pixels sees both of them). Pixels that are masked or not
+rule: a neighbour that lies outside the image, is masked, or is not finite is replaced by the
+linear extrapolation ``2X - O`` from the centre X and the opposite neighbour O (A<->H, B<->G,
+C<->F, D<->E), or by X when O is missing too; the min/max normalisations (Eq. 3, 4) use X. So a
+plane gives the same response up to the border as inside: the background never creates an edge
+through these operators, and never hides one either (an edge between two covered pixels sees
+both of them). The price: a step within one pixel of the border is extrapolated too, so the
+outermost ring of pixels can over-state it. Pixels that are masked or not
 finite themselves get the neutral value (0, or 1 for the 2003 intensities, which are 1 where
 there is no discontinuity). The outline of the coverage against the background is the profile;
 :func:`sciviz_gbuf.filters.profile_edges` draws it from the mask explicitly.
