@@ -355,14 +355,7 @@ def _gbuf_kernel(gb, which: str):
         from sciviz_gbuf.filters import edges
 
         parallel, inv_d, inv_w = edges._camera_terms(gb)
-        args = (
-            np.ascontiguousarray(gb.sz, dtype=np.float32),
-            np.ascontiguousarray(gb.depth, dtype=np.float32),
-            np.ascontiguousarray(gb.normal, dtype=np.float32),
-            np.ascontiguousarray(gb.mask, dtype=np.bool_),
-            parallel,
-            inv_d,
-        )
+        args = (*edges._kernel_inputs(gb), parallel, inv_d)
         h, w = gb.shape
         jump, crease = edges.DEFAULT_DEPTH_JUMP, edges.DEFAULT_CREASE_ANGLE
         if which == "pair":

@@ -19,7 +19,7 @@ from numba import njit, prange
 
 __all__ = ["edge_map_kernel", "id_edge_kernel", "pair_edge_kernel"]
 
-# The four 4-neighbour directions (dr, dc): right, left, down, up; and the 8 of C1.
+# The four 4-neighbour directions (dr, dc): right, left, down, up.
 _DR4 = np.array([0, 0, 1, -1], dtype=np.int64)
 _DC4 = np.array([1, -1, 0, 0], dtype=np.int64)
 # Largest turn of the surface next to a depth crease, relative to the crease's own turn.

@@ -70,16 +70,23 @@ def _camera_terms(gb: GBuffer) -> tuple[bool, float, float]:
     return bool(cam.parallel_projection), 1.0 / cam.distance, 1.0 / cam.pixel_size
 
 
+def _kernel_inputs(gb: GBuffer) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``sz``, ``depth``, ``normal``, ``mask`` as the kernels take them (no copy if already so)."""
+    return (
+        np.ascontiguousarray(gb.sz, dtype=np.float32),
+        np.ascontiguousarray(gb.depth, dtype=np.float32),
+        np.ascontiguousarray(gb.normal, dtype=np.float32),
+        np.ascontiguousarray(gb.mask, dtype=np.bool_),
+    )
+
+
 def _pair_edges(gb: GBuffer, depth_jump: float, crease_angle: float, creases: bool = True):
     parallel, inv_d, inv_w = _camera_terms(gb)
     h, w = gb.shape
     profile = np.empty((h, w), dtype=np.float32)
     crease = np.empty((h, w), dtype=np.float32)
     _k.pair_edge_kernel(
-        np.ascontiguousarray(gb.sz, dtype=np.float32),
-        np.ascontiguousarray(gb.depth, dtype=np.float32),
-        np.ascontiguousarray(gb.normal, dtype=np.float32),
-        np.ascontiguousarray(gb.mask, dtype=np.bool_),
+        *_kernel_inputs(gb),
         parallel,
         inv_d,
         inv_w,
@@ -148,8 +155,9 @@ def internal_edges(
 ) -> np.ndarray:
     """Signed internal edges: 1st-order discontinuities, > 0 convex, < 0 concave (1990 §3.2).
 
-    Neighbouring pixels whose depth is continuous (see ``depth_jump``) but whose normals turn
-    by more than ``crease_angle`` degrees; the magnitude ramps from 0 at ``crease_angle`` to 1
+    Neighbouring pixels whose depth is continuous (see ``depth_jump``) but whose surface turns
+    by more than ``crease_angle`` degrees (between their normals, or in the depth's own
+    cross-section, whichever is larger); the magnitude ramps from 0 at ``crease_angle`` to 1
     at 1.5 x ``crease_angle``, so it grows with the sharpness of the edge, as in the paper.
     Draw positive values white and negative ones black for the 1990 Fig. 7 style.
 
@@ -252,10 +260,7 @@ def edge_map(
     h, w = gb.shape
     out = np.empty((h, w, 4), dtype=np.float32)
     _k.edge_map_kernel(
-        np.ascontiguousarray(gb.sz, dtype=np.float32),
-        np.ascontiguousarray(gb.depth, dtype=np.float32),
-        np.ascontiguousarray(gb.normal, dtype=np.float32),
-        np.ascontiguousarray(gb.mask, dtype=np.bool_),
+        *_kernel_inputs(gb),
         parallel,
         inv_d,
         float(depth_jump),
