@@ -30,6 +30,7 @@ from collections.abc import Sequence
 import numpy as np
 from scipy import ndimage
 
+from ..compose import _background
 from ..errors import InputError
 from ..gbuffer import GBuffer
 from . import _edge_kernels as _k
@@ -279,13 +280,6 @@ def edge_map(
     return np.stack([inner, inner, inner, alpha], axis=-1)
 
 
-def _color(value, name: str) -> np.ndarray:
-    c = np.asarray(value, dtype=np.float32).reshape(-1)
-    if c.size != 3 or not np.isfinite(c).all() or c.min() < 0 or c.max() > 1:
-        raise InputError(f"{name}: expected an RGB triple in [0, 1], got {value!r}")
-    return c
-
-
 def enhance(
     shaded_rgb: np.ndarray,
     edge_map: np.ndarray,
@@ -325,8 +319,8 @@ def enhance(
         raise InputError(
             f"edge_map: shape {em.shape[:2]} does not match shaded_rgb {img.shape[:2]}"
         )
-    inner_c = _color(inner_color, "inner_color")
-    prof_c = _color(profile_color, "profile_color")
+    inner_c = _background(inner_color, "inner_color")
+    prof_c = _background(profile_color, "profile_color")
     base = np.clip(np.nan_to_num(img, nan=1.0), 0.0, 1.0)
     inner = np.clip(np.nan_to_num(em[..., :1], nan=0.0), 0.0, 1.0)
     alpha = np.clip(np.nan_to_num(em[..., 3:], nan=0.0), 0.0, 1.0)
