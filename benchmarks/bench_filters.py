@@ -404,61 +404,30 @@ def bench_synthetic(
     cell("synthetic", "numpy copy (alloc + write)", "no", depth.copy, peer=True)
 
     masks = (("no", None), ("yes", disc))
-    for label, m in masks:
-        cell(
-            "synthetic",
-            "sobel_gradient",
-            label,
-            lambda m=m: filters.sobel_gradient(depth, mask=m),
-        )
-    for label, m in masks:
-        cell(
-            "synthetic",
-            "second_order",
-            label,
-            lambda m=m: filters.second_order(depth, mask=m),
-        )
+
+    def both(name, call):
+        """One cell without and one with the mask; ``call(mask)`` runs the operator."""
+        for label, m in masks:
+            cell("synthetic", name, label, lambda m=m: call(m))
+
+    both("sobel_gradient", lambda m: filters.sobel_gradient(depth, mask=m))
+    both("second_order", lambda m: filters.second_order(depth, mask=m))
     grad = filters.sobel_gradient(depth)
-    for label, m in masks:
-        cell(
-            "synthetic",
-            "normalize_gradient",
-            label,
-            lambda m=m: filters.normalize_gradient(grad, mask=m),
-        )
+    both("normalize_gradient", lambda m: filters.normalize_gradient(grad, mask=m))
     lap = filters.second_order(depth)
-    for label, m in masks:
-        cell(
-            "synthetic",
-            "suppress_zeroth_order",
-            label,
-            lambda m=m: filters.suppress_zeroth_order(lap, grad, mask=m),
-        )
+    both("suppress_zeroth_order", lambda m: filters.suppress_zeroth_order(lap, grad, mask=m))
     grad = lap = None  # free (the closures above are done)
-    for label, m in masks:
-        cell(
-            "synthetic",
-            "c1_discontinuity",
-            label,
-            lambda m=m: filters.c1_discontinuity(depth, mask=m),
-        )
+    both("c1_discontinuity", lambda m: filters.c1_discontinuity(depth, mask=m))
     zbuf = depth / np.float32(2 * n)  # z-buffer-like values in [0, 1]
-    for label, m in masks:
-        cell(
-            "synthetic",
-            "diagonal_depth_discontinuity",
-            label,
-            lambda m=m: filters.diagonal_depth_discontinuity(zbuf, mask=m),
-        )
+    both(
+        "diagonal_depth_discontinuity", lambda m: filters.diagonal_depth_discontinuity(zbuf, mask=m)
+    )
     zbuf = None
     normal = make_normals(depth)
-    for label, m in masks:
-        cell(
-            "synthetic",
-            "diagonal_normal_discontinuity",
-            label,
-            lambda m=m: filters.diagonal_normal_discontinuity(normal, mask=m),
-        )
+    both(
+        "diagonal_normal_discontinuity",
+        lambda m: filters.diagonal_normal_discontinuity(normal, mask=m),
+    )
     normal = depth = disc = None
     gc.collect()
     return rows, info
