@@ -2,6 +2,7 @@
 returning new float32 arrays; inputs are never modified. Shades are in [0, 1] with 1 = lit;
 line images are ink in [0, 1] with 1 = full ink (signed images are documented as such)."""
 
+from .contours import contour_lines, hatching
 from .edges import crease_edges, edge_map, enhance, id_edges, internal_edges, profile_edges
 from .operators import (
     c1_discontinuity,
@@ -16,11 +17,13 @@ from .shading import lambert
 
 __all__ = [
     "c1_discontinuity",
+    "contour_lines",
     "crease_edges",
     "diagonal_depth_discontinuity",
     "diagonal_normal_discontinuity",
     "edge_map",
     "enhance",
+    "hatching",
     "id_edges",
     "internal_edges",
     "lambert",

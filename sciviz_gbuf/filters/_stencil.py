@@ -17,6 +17,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
+from ._contour_ink import hatch_ink, levels_ink, regular_ink
+
 __all__ = ["diag_normal", "run"]
 
 
@@ -31,20 +33,20 @@ _FMAX = np.float32(np.finfo(np.float32).max)
 
 
 @njit(inline="always", cache=True)
-def _sobel(x, a, b, c, d, e, f, g, h, k, aux):
+def _sobel(x, a, b, c, d, e, f, g, h, k, aux, prm):
     # Scaled before summing: float32 values near the limit give inf at worst, never inf - inf.
     a, b, c, d, e, f, g, h = a * _E, b * _Q, c * _E, d * _Q, e * _Q, f * _E, g * _Q, h * _E
     return abs(a + b + c - f - g - h) + abs(c + e + h - a - d - f)
 
 
 @njit(inline="always", cache=True)
-def _second(x, a, b, c, d, e, f, g, h, k, aux):
+def _second(x, a, b, c, d, e, f, g, h, k, aux, prm):
     s = a * _E + b * _E + c * _E + d * _E + e * _E + f * _E + g * _E + h * _E
     return (x - s) * _EIGHT_THIRDS
 
 
 @njit(inline="always", cache=True)
-def _c1(x, a, b, c, d, e, f, g, h, k, aux):
+def _c1(x, a, b, c, d, e, f, g, h, k, aux, prm):
     return (
         abs(a - x)
         + 2 * abs(b - x)
@@ -58,14 +60,14 @@ def _c1(x, a, b, c, d, e, f, g, h, k, aux):
 
 
 @njit(inline="always", cache=True)
-def _diag_depth(x, a, b, c, d, e, f, g, h, k, aux):
+def _diag_depth(x, a, b, c, d, e, f, g, h, k, aux, prm):
     s = 1 - _H * min(abs(a - h), _TWO)
     t = 1 - _H * min(abs(c - f), _TWO)
     return s * s * t * t
 
 
 @njit(inline="always", cache=True)
-def _normalize(x, a, b, c, d, e, f, g, h, k, aux):
+def _normalize(x, a, b, c, d, e, f, g, h, k, aux, prm):
     # Eq. 3 on a gradient image: (g - g_min) / max(g_max - g_min, k_g).
     lo = min(x, a, b, c, d, e, f, g, h)
     hi = max(x, a, b, c, d, e, f, g, h)
@@ -73,38 +75,36 @@ def _normalize(x, a, b, c, d, e, f, g, h, k, aux):
 
 
 @njit(inline="always", cache=True)
-def _suppress(x, a, b, c, d, e, f, g, h, k, aux):
+def _suppress(x, a, b, c, d, e, f, g, h, k, aux, prm):
     # Eq. 4: x, a..h are the gradient g around the pixel, aux its second-order value l.
     t = max(x, a, b, c, d, e, f, g, h) / k
     return aux / max(_ONE, t * t)
 
 
-# Operator codes of the shared kernel (one cached kernel; the code is loop-invariant).
-SOBEL, SECOND, C1, DIAG_DEPTH, NORMALIZE, SUPPRESS = range(6)
-_NEUTRAL = {DIAG_DEPTH: 1.0}
-_CODES = {
-    "sobel": SOBEL,
-    "second": SECOND,
-    "c1": C1,
-    "diag_depth": DIAG_DEPTH,
-    "normalize": NORMALIZE,
-    "suppress": SUPPRESS,
-}
+# Operator codes: they pick the border rule and the neutral value; the operator itself is
+# passed to the row loop as a function, so each kernel compiles only its own operator.
+SOBEL, SECOND, C1, DIAG_DEPTH, NORMALIZE, SUPPRESS, CONTOUR, LEVELS, HATCH = range(9)
 
 
 @njit(inline="always", cache=True)
-def _apply(code, x, a, b, c, d, e, f, g, h, k, aux):
-    if code == SOBEL:
-        return _sobel(x, a, b, c, d, e, f, g, h, k, aux)
-    if code == SECOND:
-        return _second(x, a, b, c, d, e, f, g, h, k, aux)
-    if code == C1:
-        return _c1(x, a, b, c, d, e, f, g, h, k, aux)
-    if code == DIAG_DEPTH:
-        return _diag_depth(x, a, b, c, d, e, f, g, h, k, aux)
-    if code == NORMALIZE:
-        return _normalize(x, a, b, c, d, e, f, g, h, k, aux)
-    return _suppress(x, a, b, c, d, e, f, g, h, k, aux)
+def _grad(x, a, b, c, d, e, f, g, h, k, aux, prm):
+    # The Eq. 9 gradient of the contour codes, or the caller's own (k > 0), passed in aux.
+    return aux if k > 0 else _c1(x, a, b, c, d, e, f, g, h, k, aux, prm)
+
+
+@njit(inline="always", cache=True)
+def _contour(x, a, b, c, d, e, f, g, h, k, aux, prm):
+    return regular_ink(x, _grad(x, a, b, c, d, e, f, g, h, k, aux, prm), prm)
+
+
+@njit(inline="always", cache=True)
+def _levels(x, a, b, c, d, e, f, g, h, k, aux, prm):
+    return levels_ink(x, _grad(x, a, b, c, d, e, f, g, h, k, aux, prm), prm)
+
+
+@njit(inline="always", cache=True)
+def _hatch(x, a, b, c, d, e, f, g, h, k, aux, prm):
+    return hatch_ink(x, _grad(x, a, b, c, d, e, f, g, h, k, aux, prm), prm)
 
 
 @njit(inline="always", cache=True)
@@ -125,13 +125,15 @@ def _fill(v, ok, opp, ok_opp, x, extrapolate):
 
 
 @njit(inline="always", cache=True)
-def _pixel(code, neutral, u, mid, lo, mu, mm, ml, up, dn, c, cl, cr, lf, rt, k, aux, out):
+def _pixel(code, op, neutral, u, mid, lo, mu, mm, ml, up, dn, c, cl, cr, lf, rt, k, aux, prm, out):
     x = mid[c]
     okx = (x - x == 0) & mm[c]
     ax = x
     if code == SUPPRESS:
         ax = aux[c]
         okx = okx & (ax - ax == 0)
+    elif code >= CONTOUR:
+        ax = aux[c]
     # Min/max (Eq. 3, 4) take the neighbourhood as it is; differentials extrapolate.
     ext = code != NORMALIZE and code != SUPPRESS
     a0, b0, c0, d0 = u[cl], u[c], u[cr], mid[cl]
@@ -152,16 +154,32 @@ def _pixel(code, neutral, u, mid, lo, mu, mm, ml, up, dn, c, cl, cr, lf, rt, k, 
     f = _fill(f0, okf, c0, okc, x, ext)
     g = _fill(g0, okg, b0, okb, x, ext)
     hh = _fill(h0, okh, a0, oka, x, ext)
-    v = _apply(code, x, a, b, cc, d, e, f, g, hh, k, ax)
+    v = op(x, a, b, cc, d, e, f, g, hh, k, ax, prm)
     out[c] = v if okx else neutral
 
 
 @njit(inline="always", cache=True)
-def _rows(code, img, m, k, aux, out):
-    """Apply operator ``code`` to every pixel; ``m`` is the (H, W) mask or one all-True row.
+def _rows_valid(code, u, mid, lo, mu, mm, ml, xr, masked):
+    """True if three rows (and the aux row, for Eq. 4) are finite and covered throughout."""
+    bad = False
+    for c in range(mid.shape[0]):
+        bad |= not ((u[c] - u[c] == 0) & (mid[c] - mid[c] == 0) & (lo[c] - lo[c] == 0))
+    if masked:
+        for c in range(mid.shape[0]):
+            bad |= not (mu[c] & mm[c] & ml[c])
+    if code == SUPPRESS:
+        for c in range(mid.shape[0]):
+            bad |= not (xr[c] - xr[c] == 0)
+    return not bad
 
-    Inlined into one small kernel per operator with ``code`` a constant, so LLVM folds the
-    operator switch away and vectorises the interior loop.
+
+@njit(inline="always", cache=True)
+def _rows(code, op, img, m, k, aux, prm, out):
+    """Apply operator ``op`` (of kind ``code``) to every pixel; ``m`` is the (H, W) mask or
+    one all-True row; ``prm`` holds the parameters of the contour codes.
+
+    Inlined into one small kernel per operator with ``code`` a constant and ``op`` a known
+    function, so LLVM folds the switches away and vectorises the interior loop.
     """
     h, w = img.shape
     neutral = np.float32(1.0) if code == DIAG_DEPTH else np.float32(0.0)
@@ -180,6 +198,7 @@ def _rows(code, img, m, k, aux, out):
         o = out[r]
         _pixel(
             code,
+            op,
             neutral,
             u,
             mid,
@@ -196,32 +215,55 @@ def _rows(code, img, m, k, aux, out):
             w > 1,
             k,
             xr,
+            prm,
             o,
         )
-        for c in range(1, w - 1):
-            _pixel(
-                code,
-                neutral,
-                u,
-                mid,
-                lo,
-                mu,
-                mm,
-                ml,
-                up,
-                dn,
-                c,
-                c - 1,
-                c + 1,
-                True,
-                True,
-                k,
-                xr,
-                o,
-            )
+        if up & dn & _rows_valid(code, u, mid, lo, mu, mm, ml, xr, m.shape[0] > 1):
+            # Every neighbour is valid: the border rule is the identity, so skip it.
+            for c in range(1, w - 1):
+                ax = xr[c] if code >= SUPPRESS else mid[c]
+                o[c] = op(
+                    mid[c],
+                    u[c - 1],
+                    u[c],
+                    u[c + 1],
+                    mid[c - 1],
+                    mid[c + 1],
+                    lo[c - 1],
+                    lo[c],
+                    lo[c + 1],
+                    k,
+                    ax,
+                    prm,
+                )
+        else:
+            for c in range(1, w - 1):
+                _pixel(
+                    code,
+                    op,
+                    neutral,
+                    u,
+                    mid,
+                    lo,
+                    mu,
+                    mm,
+                    ml,
+                    up,
+                    dn,
+                    c,
+                    c - 1,
+                    c + 1,
+                    True,
+                    True,
+                    k,
+                    xr,
+                    prm,
+                    o,
+                )
         if w > 1:
             _pixel(
                 code,
+                op,
                 neutral,
                 u,
                 mid,
@@ -238,38 +280,54 @@ def _rows(code, img, m, k, aux, out):
                 False,
                 k,
                 xr,
+                prm,
                 o,
             )
 
 
 @njit(parallel=True, cache=True)
-def _k_sobel(img, m, k, aux, out):
-    _rows(SOBEL, img, m, k, aux, out)
+def _k_sobel(img, m, k, aux, prm, out):
+    _rows(SOBEL, _sobel, img, m, k, aux, prm, out)
 
 
 @njit(parallel=True, cache=True)
-def _k_second(img, m, k, aux, out):
-    _rows(SECOND, img, m, k, aux, out)
+def _k_second(img, m, k, aux, prm, out):
+    _rows(SECOND, _second, img, m, k, aux, prm, out)
 
 
 @njit(parallel=True, cache=True)
-def _k_c1(img, m, k, aux, out):
-    _rows(C1, img, m, k, aux, out)
+def _k_c1(img, m, k, aux, prm, out):
+    _rows(C1, _c1, img, m, k, aux, prm, out)
 
 
 @njit(parallel=True, cache=True)
-def _k_diag_depth(img, m, k, aux, out):
-    _rows(DIAG_DEPTH, img, m, k, aux, out)
+def _k_diag_depth(img, m, k, aux, prm, out):
+    _rows(DIAG_DEPTH, _diag_depth, img, m, k, aux, prm, out)
 
 
 @njit(parallel=True, cache=True)
-def _k_normalize(img, m, k, aux, out):
-    _rows(NORMALIZE, img, m, k, aux, out)
+def _k_normalize(img, m, k, aux, prm, out):
+    _rows(NORMALIZE, _normalize, img, m, k, aux, prm, out)
 
 
 @njit(parallel=True, cache=True)
-def _k_suppress(img, m, k, aux, out):
-    _rows(SUPPRESS, img, m, k, aux, out)
+def _k_suppress(img, m, k, aux, prm, out):
+    _rows(SUPPRESS, _suppress, img, m, k, aux, prm, out)
+
+
+@njit(parallel=True, cache=True)
+def _k_contour(img, m, k, aux, prm, out):
+    _rows(CONTOUR, _contour, img, m, k, aux, prm, out)
+
+
+@njit(parallel=True, cache=True)
+def _k_levels(img, m, k, aux, prm, out):
+    _rows(LEVELS, _levels, img, m, k, aux, prm, out)
+
+
+@njit(parallel=True, cache=True)
+def _k_hatch(img, m, k, aux, prm, out):
+    _rows(HATCH, _hatch, img, m, k, aux, prm, out)
 
 
 _KERNELS = {
@@ -279,17 +337,32 @@ _KERNELS = {
     "diag_depth": _k_diag_depth,
     "normalize": _k_normalize,
     "suppress": _k_suppress,
+    "contour": _k_contour,
+    "levels": _k_levels,
+    "hatch": _k_hatch,
 }
 
 
-def run(name: str, image: np.ndarray, mask: np.ndarray | None, k: float = 1.0, aux=None):
-    """Apply stencil ``name`` to a C-contiguous float32 image; returns a new float32 image."""
+def run(
+    name: str,
+    image: np.ndarray,
+    mask: np.ndarray | None,
+    k: float = 1.0,
+    aux: np.ndarray | None = None,
+    prm: np.ndarray | None = None,
+) -> np.ndarray:
+    """Apply stencil ``name`` to a C-contiguous float32 image; returns a new float32 image.
+
+    ``aux`` is a second (H, W) float32 image (Eq. 4's ``l``; a contour code's own gradient,
+    used when ``k > 0``) and ``prm`` the float32 parameters of the contour codes."""
     h, w = image.shape
     out = np.empty((h, w), dtype=np.float32)
     m = mask if mask is not None else np.ones((1, w), dtype=np.bool_)
     if aux is None:
         aux = np.zeros((1, w), dtype=np.float32)
-    _KERNELS[name](image, m, np.float32(k), aux, out)
+    if prm is None:
+        prm = np.zeros(1, dtype=np.float32)
+    _KERNELS[name](image, m, np.float32(k), aux, prm, out)
     return out
 
 

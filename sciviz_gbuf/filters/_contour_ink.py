@@ -1,0 +1,139 @@
+"""Per-pixel contour and hatching ink (1990 Eq. 7-8, 10-15, 17-21), inlined into the stencil
+kernels of :mod:`._stencil` after the Eq. 9 gradient.
+
+All parameters travel in one float32 vector ``prm`` (layout below) so that one cached kernel
+serves every setting; they are loop-invariant, and the arithmetic is branch-free selects so the
+row loop still vectorises. Levels of :func:`levels_ink` follow the fixed slots.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+# Slots of ``prm``. The line profile f1 at distance t (px) from a line's centre is
+# ``cap * P(clip(a - b t, 0, 1))`` with ``P(v) = v (p1 + v (p2 + v p3))``: see ``line_params``.
+BASE = 0  # p0 of Eq. 12 (hatching: the offset of the line family)
+Q = 1  # interval q (hatching: p_d of Eq. 19)
+LINE_A = 2  # a and cap of the (minor) lines
+LINE_CAP = 3
+LINE_B = 4  # b = 1 / filter width, shared
+P1 = 5
+P2 = 6
+P3 = 7
+INV_GEPS = 8  # 1 / g_eps of Eq. 11 (huge when g_eps = 0)
+C_SPARSE = 9
+C_DENSE = 10
+DENSE_AT = 11  # spacing (px) where the Eq. 15 blend starts (-huge: no dense handling)
+INV_D = 12  # 1 / d
+MAJOR_Q = 13  # interval of the major family (0: none)
+MAJOR_A = 14
+MAJOR_CAP = 15
+SPACING = 16  # hatching: d_i of Eq. 18-20
+SWITCH = 17  # hatching: spacing ratio where the in-between lines appear
+INV_FADE = 18  # hatching: 1 / width of that transition
+NPRM = 20
+
+_Z = np.float32(0.0)
+_H = np.float32(0.5)
+_ONE = np.float32(1.0)
+_BIG = np.float32(1e30)
+_TINY = np.float32(1e-30)
+
+
+@njit(inline="always", cache=True)
+def _line(t, a, cap, prm):
+    """f1: ink at distance ``t >= 0`` px from the centre of a line (Eq. 8, Fig. 4)."""
+    v = min(max(a - t * prm[LINE_B], _Z), _ONE)
+    return cap * v * (prm[P1] + v * (prm[P2] + v * prm[P3]))
+
+
+@njit(inline="always", cache=True)
+def _spacing(q, g):
+    # On-screen spacing q / g of lines q apart, finite even where g = 0.
+    return q / max(g, q / _BIG)
+
+
+@njit(inline="always", cache=True)
+def _family(x, g, q, a, cap, prm):
+    """Ink of the regular levels ``base + n q`` (Eq. 13-14): the nearest line and the one beyond
+    it, so antialiased lines that nearly touch still add up; plus the spacing ``q / g``."""
+    s = _spacing(q, g)
+    r = (x - prm[BASE]) * (_ONE / q)  # loop-invariant reciprocal
+    frac = abs(r - np.floor(r + _H))
+    c = _line(frac * s, a, cap, prm) + _line((_ONE - frac) * s, a, cap, prm)
+    return min(c, _ONE), s
+
+
+@njit(inline="always", cache=True)
+def _flat_dense(c, g, s, prm):
+    """f_g of Eq. 11 and 15: fade to ``c_sparse`` below ``g_eps``; where lines come closer than
+    the dense spacing, fade to ``c_dense`` within one line width further."""
+    ws = min(g * prm[INV_GEPS], _ONE)
+    c = ws * c + (_ONE - ws) * prm[C_SPARSE]
+    wd = min(max((s - prm[DENSE_AT]) * prm[INV_D] + _ONE, _Z), _ONE)
+    return wd * c + (_ONE - wd) * prm[C_DENSE]
+
+
+@njit(inline="always", cache=True)
+def _finite_ink(v):
+    return min(max(v, _Z), _ONE) if v == v else _Z
+
+
+@njit(inline="always", cache=True)
+def regular_ink(x, g, prm):
+    """Regular contours (Eq. 10-15), with an optional major family that never thins out."""
+    c, s = _family(x, g, prm[Q], prm[LINE_A], prm[LINE_CAP], prm)
+    v = _flat_dense(c, g, s, prm)
+    qm = prm[MAJOR_Q]
+    if qm > 0:
+        cm, _ = _family(x, g, qm, prm[MAJOR_A], prm[MAJOR_CAP], prm)
+        ws = min(g * prm[INV_GEPS], _ONE)
+        v = max(v, ws * cm + (_ONE - ws) * prm[C_SPARSE])
+    return _finite_ink(v)
+
+
+@njit(inline="always", cache=True)
+def levels_ink(x, g, prm):
+    """Contours at the sorted levels ``prm[NPRM:]`` (Eq. 7 for the two levels around ``x``)."""
+    lv = prm[NPRM:]
+    n = lv.shape[0]
+    lo, hi = 0, n
+    while lo < hi:  # first level > x
+        mid = (lo + hi) >> 1
+        if lv[mid] <= x:
+            lo = mid + 1
+        else:
+            hi = mid
+    below = lv[lo - 1] if lo > 0 else -_BIG
+    above = lv[lo] if lo < n else _BIG
+    a, cap = prm[LINE_A], prm[LINE_CAP]
+    gg = max(g, _TINY)
+    c = _line((x - below) / gg, a, cap, prm) + _line((above - x) / gg, a, cap, prm)
+    s = _spacing(above - below, g) if (lo > 0) & (lo < n) else _BIG
+    return _finite_ink(_flat_dense(min(c, _ONE), g, s, prm))
+
+
+@njit(inline="always", cache=True)
+def hatch_ink(x, g, prm):
+    """Curved hatching by binary thinning out (Eq. 17-21).
+
+    The interval ``p_n = 2^n p_d`` is chosen per pixel so that its lines lie ``d_i`` to ``2 d_i``
+    pixels apart; the lines halfway between them fade in as that spacing grows past
+    ``SWITCH * d_i``, so the spacing stays near ``d_i`` whatever the gradient.
+    """
+    di = prm[SPACING]
+    m, e = math.frexp(di * g / prm[Q])  # y = m 2^e, m in [0.5, 1): 2^e / y in (1, 2]
+    ratio = _ONE / np.float32(m)
+    s = di * ratio  # on-screen spacing of the p_n lines
+    pn = prm[Q] * np.float32(math.ldexp(1.0, e))
+    r = (x - prm[BASE]) / pn
+    frac = abs(r - np.floor(r + _H))
+    a, cap = prm[LINE_A], prm[LINE_CAP]
+    w = min(max((ratio - prm[SWITCH]) * prm[INV_FADE] + _H, _Z), _ONE)
+    c = _line(frac * s, a, cap, prm) + _line((_ONE - frac) * s, a, cap, prm)
+    c += w * _line(abs(_H - frac) * s, a, cap, prm)
+    ok = (g > 0) & (g - g == 0)  # no gradient, no direction for the lines
+    return _finite_ink(c) if ok else _Z
