@@ -3,15 +3,17 @@
 Two scenes: PyVista's nut (iso view) and the Jacksboro fault DEM seen bird's-eye from the
 south-east. Every channel of each G-buffer is written as a PNG, with a titled montage of all of
 them. Then the edge figures of Saito & Takahashi (1990) on the nut: Fig. 3 (edge drawing from
-the depth image) and Fig. 7 (edge enhancement, with the 2003 edge map). ``index.html`` shows
-every image with a caption, the camera and the timings.
+the depth image) and Fig. 7 (edge enhancement, with the 2003 edge map); and their contour
+figures, which need no capture: Fig. 5 (contour lines of s = xy, with the Fig. 4 line profiles),
+Fig. 6 (curved hatching) and Fig. 11 (a plan-view topographic map of the DEM). ``index.html``
+shows every image with a caption, the camera (of the captures) and the timings.
 """
 
 from __future__ import annotations
 
 import html
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
@@ -25,7 +27,17 @@ from .errors import InputError
 from .filters import lambert
 from .gbuffer import GBuffer
 from .recipes import CAPTIONS as EDGE_CAPTIONS
-from .recipes import fig3_panels, fig7_panels, framed_camera, nut_camera
+from .recipes import (
+    CONTOUR_CAPTIONS,
+    fig3_panels,
+    fig5_panels,
+    fig6_panels,
+    fig7_panels,
+    fig11_panels,
+    framed_camera,
+    nut_camera,
+    write_panels,
+)
 
 __all__ = ["run_demo", "terrain_birdseye_camera"]
 
@@ -41,6 +53,9 @@ CAPTIONS = {
     "cell_id": "cell id: cell of the dataset, one hashed colour per cell",
     "mask": "mask: coverage, white where the scene covers the pixel",
 }
+# Largest size of the (square) contour figures, in pixels: 800 x 20 m pixels of the DEM still
+# fit in it around the Fig. 11 map's centre.
+CONTOUR_SIZE = 800
 # Upper-left light in eye space, as in hand drawn illustrations.
 _LIGHT = (-0.4, 0.5, 0.77)
 
@@ -192,71 +207,119 @@ def _write_scene(
     scene.gbuffer = g
 
 
+Panel = tuple[str, str, np.ndarray]
+
+
 @dataclass
-class _EdgeFigure:
-    """One edge figure of the paper, made from its own capture of the nut."""
+class _Figure:
+    """One figure of the paper: its panels, made from its own capture of the nut (edge figures,
+    ``supersample`` set; ``panels`` takes the G-buffer) or from nothing but the figure's own
+    field or DEM grid (contour figures, ``supersample`` None; ``panels`` takes no argument)."""
 
     name: str
     title: str
     intro: str
-    supersample: int
-    panels: Callable[[GBuffer], list[tuple[str, str, np.ndarray]]]
-    # Filled in by _write_edge_figure, read by _write_index.
+    panels: Callable[..., list[Panel]]
+    captions: Mapping[str, str]
+    # Timing label of the panels' filters.
+    stage: str
+    supersample: int | None = None
+    # Filled in by _write_figure, read by _write_index.
     images: list[tuple[str, Path]] = field(default_factory=list)
     timings: dict[str, float] = field(default_factory=dict)
     gbuffer: GBuffer | None = None
 
 
-def _edge_figures() -> list[_EdgeFigure]:
+def _edge_figures() -> list[_Figure]:
     return [
-        _EdgeFigure(
+        _Figure(
             "fig3",
             "Edges: Saito & Takahashi 1990 Fig. 3, edge drawing on the machine nut",
             "The paper's literal operators on the sz image (Eq. 1-4, k_g = 10, k_l = 2; the "
             "background is sz = 0, infinitely far), then the robust profile_edges and "
             "internal_edges. No supersampling: the operators work on single pixels.",
-            1,
             fig3_panels,
+            EDGE_CAPTIONS,
+            "edge filters",
+            supersample=1,
         ),
-        _EdgeFigure(
+        _Figure(
             "fig7",
             "Edges: Saito & Takahashi 1990 Fig. 7, edge enhancement (and the 2003 edge map)",
             "A shaded image enhanced with white convex edges and black concave edges and "
             "profiles; then with black lines only; then with the RGBA edge map of Nienhaus & "
             "Döllner 2003. Captured 3x supersampled, lines 1.5 pixels wide, antialiased.",
-            3,
             partial(fig7_panels, width=1.5),
+            EDGE_CAPTIONS,
+            "edge filters",
+            supersample=3,
         ),
     ]
 
 
-def _write_edge_figure(
-    fig: _EdgeFigure, outdir: Path, window_size: tuple[int, int], progress_bar: bool
+def _contour_figures(size: int) -> list[_Figure]:
+    """The contour figures, ``size`` x ``size`` pixels each; no capture needed."""
+    return [
+        _Figure(
+            "fig5",
+            "Contours: Saito & Takahashi 1990 Fig. 5 (and Fig. 4), contour lines of s = xy",
+            "Contour lines drawn per pixel from the value and its Eq. 9 gradient, without "
+            "tracking (Eq. 7-15), lines 1.5 pixels wide: the flat centre fades to white "
+            "(c_sparse = 0, Eq. 11), the crowded corners fill with c_dense (Eq. 15), black in "
+            "(a), grey in (b). Then the three line profiles f1 of Fig. 4, zoomed 8x.",
+            partial(fig5_panels, size),
+            CONTOUR_CAPTIONS,
+            "contour filters",
+        ),
+        _Figure(
+            "fig6",
+            "Contours: Saito & Takahashi 1990 Fig. 6, curved hatching of s = xy",
+            "Regular contours crowd where the gradient is large and spread where it is small; "
+            "curved hatching by binary thinning out (Eq. 17-21) keeps its lines about 6 pixels "
+            "apart everywhere, with the filter's quick fade-in of the in-between lines and "
+            "with Eq. 18 exactly.",
+            partial(fig6_panels, size),
+            CONTOUR_CAPTIONS,
+            "hatching filters",
+        ),
+        _Figure(
+            "fig11",
+            "Contours: Saito & Takahashi 1990 Fig. 11, a topographic map of the Jacksboro DEM",
+            "Plan view, north up, 20 m pixels; the DEM grid is the G-buffer (no rendering). "
+            "100 m major contours 2 pixels wide never thin out; 20 m minor contours 1 pixel "
+            "wide fade to white (c_dense = 0) where they come closer than 4 pixels, so only "
+            "the majors remain on steep slopes. Relief shade from the grid's normals (sun "
+            "azimuth 315°, altitude 45°), colour bands every 100 m, and their combination.",
+            partial(fig11_panels, size),
+            CONTOUR_CAPTIONS,
+            "DEM loading, resampling and filters",
+        ),
+    ]
+
+
+def _write_figure(
+    fig: _Figure, outdir: Path, window_size: tuple[int, int], progress_bar: bool
 ) -> None:
     t0 = time.perf_counter()
-    nut = load_nut()
-    g = capture(
-        nut,
-        window_size=window_size,
-        camera=nut_camera(nut.bounds, aspect=window_size[0] / window_size[1]),
-        supersample=fig.supersample,
-        progress_bar=progress_bar,
-    )
+    args: tuple[GBuffer, ...] = ()
+    if fig.supersample is not None:  # an edge figure: its own capture of the nut
+        nut = load_nut()
+        fig.gbuffer = capture(
+            nut,
+            window_size=window_size,
+            camera=nut_camera(nut.bounds, aspect=window_size[0] / window_size[1]),
+            supersample=fig.supersample,
+            progress_bar=progress_bar,
+        )
+        args = (fig.gbuffer,)
     t1 = time.perf_counter()
-    panels = fig.panels(g)
+    panels = fig.panels(*args)
     t2 = time.perf_counter()
-    for key, _, image in panels:
-        path = write_png(outdir / f"{fig.name}_{key}.png", image)
-        fig.images.append((EDGE_CAPTIONS[key], path))
-    tiles = [(title, image) for _, title, image in panels]
-    path = write_png(outdir / f"{fig.name}_montage.png", montage(tiles, columns=4))
+    *paths, path = write_panels(outdir, fig.name, panels, columns=4)
+    fig.images = [(fig.captions[key], p) for (key, _, _), p in zip(panels, paths, strict=True)]
     fig.images.append(("montage: all panels above, titled as in the paper", path))
-    fig.timings = {
-        "capture": t1 - t0,
-        "edge filters": t2 - t1,
-        "PNG images": time.perf_counter() - t2,
-    }
-    fig.gbuffer = g
+    fig.timings = {} if fig.gbuffer is None else {"capture": t1 - t0}
+    fig.timings |= {fig.stage: t2 - t1, "PNG images": time.perf_counter() - t2}
 
 
 def _camera_text(g: GBuffer) -> list[str]:
@@ -306,23 +369,23 @@ def _figures_html(images: list[tuple[str, Path]]) -> list[str]:
     ]
 
 
-def _edge_html(fig: _EdgeFigure) -> str:
-    assert fig.gbuffer is not None
+def _figure_html(fig: _Figure) -> str:
     esc = html.escape
     parts = [f"<h2>{esc(fig.title)}</h2>", f"<p>{esc(fig.intro)}</p>"]
-    parts.append(f"<p>{esc(repr(fig.gbuffer))}</p><p>Camera: ")
-    parts.append("<br>".join(esc(line) for line in _camera_text(fig.gbuffer)) + "</p>")
+    if fig.gbuffer is not None:
+        parts.append(f"<p>{esc(repr(fig.gbuffer))}</p><p>Camera: ")
+        parts.append("<br>".join(esc(line) for line in _camera_text(fig.gbuffer)) + "</p>")
     timing = ", ".join(f"{k} {v:.2f} s" for k, v in fig.timings.items())
     parts.append(f"<p>Timings: {esc(timing)}</p>")
     return "\n".join(parts + _figures_html(fig.images))
 
 
-def _write_index(scenes: list[_Scene], figures: list[_EdgeFigure], outdir: Path) -> Path:
-    body = "\n".join([_scene_html(s) for s in scenes] + [_edge_html(f) for f in figures])
+def _write_index(scenes: list[_Scene], figures: list[_Figure], outdir: Path) -> Path:
+    body = "\n".join([_scene_html(s) for s in scenes] + [_figure_html(f) for f in figures])
     page = (
         '<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
         f"<title>sciviz_gbuf demo</title><style>{_STYLE}</style></head><body>\n"
-        "<h1>sciviz_gbuf demo: G-buffers and edges of bundled sample data</h1>\n"
+        "<h1>sciviz_gbuf demo: G-buffers, edges and contours of bundled sample data</h1>\n"
         f"{body}\n</body></html>\n"
     )
     path = outdir / "index.html"
@@ -336,14 +399,16 @@ def run_demo(
     window_size: tuple[int, int] = (800, 600),
     progress_bar: bool = False,
 ) -> list[Path]:
-    """Capture the sample scenes, write their channels, G-buffers, edge figures and a gallery page.
+    """Capture the sample scenes; write their channels, G-buffers, the paper's edge and contour
+    figures and a gallery page.
 
     Parameters
     ----------
     outdir : str or path-like, default: "sciviz_gbuf_demo"
         Directory to write into (created if missing); nothing is written elsewhere.
     window_size : (int, int), default: (800, 600)
-        ``(width, height)`` of the captures and of each channel image.
+        ``(width, height)`` of the captures, of each channel image and of the edge figures. The
+        contour figures are square, ``min(width, height, 800)`` pixels across (at least 16).
     progress_bar : bool, default: False
         Show a progress bar for each capture.
 
@@ -351,8 +416,9 @@ def run_demo(
     -------
     list of pathlib.Path
         Every file written: per scene one PNG per channel, a montage PNG and the G-buffer
-        ``.npz``; then one PNG per panel of the 1990 Fig. 3 and Fig. 7 edge figures with a
-        montage each; finally ``index.html``.
+        ``.npz``; then one PNG per panel of the 1990 Fig. 3 and Fig. 7 edge figures and of the
+        Fig. 5, Fig. 6 and Fig. 11 contour figures, with a montage each (``fig<n>_<key>.png``,
+        ``fig<n>_montage.png``); finally ``index.html``.
     """
     width, height = _check_window_size(window_size)
     out = Path(outdir)
@@ -360,8 +426,8 @@ def run_demo(
     scenes = _scenes(width / height)
     for scene in scenes:
         _write_scene(scene, out, (width, height), progress_bar)
-    figures = _edge_figures()
+    figures = _edge_figures() + _contour_figures(max(16, min(width, height, CONTOUR_SIZE)))
     for fig in figures:
-        _write_edge_figure(fig, out, (width, height), progress_bar)
+        _write_figure(fig, out, (width, height), progress_bar)
     files = [p for s in scenes for p in s.files] + [p for f in figures for _, p in f.images]
     return [*files, _write_index(scenes, figures, out)]

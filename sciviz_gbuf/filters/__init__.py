@@ -2,6 +2,7 @@
 returning new float32 arrays; inputs are never modified. Shades are in [0, 1] with 1 = lit;
 line images are ink in [0, 1] with 1 = full ink (signed images are documented as such)."""
 
+from .contour_vectors import ContourPolyline, contour_polylines, polylines_to_geojson
 from .contours import contour_lines, hatching
 from .edges import crease_edges, edge_map, enhance, id_edges, internal_edges, profile_edges
 from .operators import (
@@ -16,8 +17,10 @@ from .operators import (
 from .shading import lambert
 
 __all__ = [
+    "ContourPolyline",
     "c1_discontinuity",
     "contour_lines",
+    "contour_polylines",
     "crease_edges",
     "diagonal_depth_discontinuity",
     "diagonal_normal_discontinuity",
@@ -28,6 +31,7 @@ __all__ = [
     "internal_edges",
     "lambert",
     "normalize_gradient",
+    "polylines_to_geojson",
     "profile_edges",
     "second_order",
     "sobel_gradient",

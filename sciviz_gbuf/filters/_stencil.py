@@ -30,6 +30,11 @@ _ONE = np.float32(1.0)
 _TWO = np.float32(2.0)
 _EIGHT_THIRDS = np.float32(8.0 / 3.0)
 _FMAX = np.float32(np.finfo(np.float32).max)
+_TINY = np.float32(1e-30)
+# Quartic fit of sqrt(1 + r^2) / (1 + r / 2) on [0, 1] (see _grad).
+_A0, _A1, _A2, _A3, _A4 = (
+    np.float32(v) for v in (1.000022, -0.50084359, 0.75746694, -0.3989078, 0.08508414)
+)
 
 
 @njit(inline="always", cache=True)
@@ -88,8 +93,19 @@ SOBEL, SECOND, C1, DIAG_DEPTH, NORMALIZE, SUPPRESS, CONTOUR, LEVELS, HATCH = ran
 
 @njit(inline="always", cache=True)
 def _grad(x, a, b, c, d, e, f, g, h, k, aux, prm):
-    # The Eq. 9 gradient of the contour codes, or the caller's own (k > 0), passed in aux.
-    return aux if k > 0 else _c1(x, a, b, c, d, e, f, g, h, k, aux, prm)
+    """The gradient magnitude of the contour codes, or the caller's own (k > 0) from aux.
+
+    Eq. 9 is kept for its robustness at ridges and kinks, where central differences vanish,
+    but on a plane it reads ``|grad| (cos + sin / 2)`` of the angle to the nearer axis, up to
+    12% high near 27 degrees (lines that much wider). It is divided by that factor, with the
+    direction from Sobel sums: ``sqrt(1 + r^2) / (1 + r / 2)`` of their ratio ``r <= 1``, as a
+    quartic (error 2e-5), so it is exact on planes in every direction.
+    """
+    gx = abs((c - a) + _TWO * (e - d) + (h - f))
+    gy = abs((f - a) + _TWO * (g - b) + (h - c))
+    r = min(gx, gy) / max(gx, gy, _TINY)
+    iso = _A0 + r * (_A1 + r * (_A2 + r * (_A3 + r * _A4)))
+    return aux if k > 0 else _c1(x, a, b, c, d, e, f, g, h, k, aux, prm) * iso
 
 
 @njit(inline="always", cache=True)

@@ -3,22 +3,36 @@
 - :mod:`.framing`: cameras that frame a bounding box from a given direction.
 - :mod:`.illustration`: shaded + edge illustrations of a G-buffer (the ``edges`` command).
 - :mod:`.saito1990`: the panels of Saito & Takahashi's Fig. 3 and Fig. 7 (and the 2003 edge map).
+- :mod:`.contour_figures`: the panels of their Fig. 5 (contour lines), Fig. 6 (curved hatching)
+  and Fig. 11 (a plan-view topographic map of the bundled DEM).
 """
 
+from .contour_figures import (
+    CONTOUR_CAPTIONS,
+    fig5_panels,
+    fig6_panels,
+    fig11_panels,
+    write_panels,
+)
 from .framing import framed_camera, oblique_camera
 from .illustration import STYLES, fig7_edge_map, illustrate, shade_image, signed_to_grey
 from .saito1990 import CAPTIONS, fig3_panels, fig7_panels, nut_camera
 
 __all__ = [
     "CAPTIONS",
+    "CONTOUR_CAPTIONS",
     "STYLES",
     "fig3_panels",
+    "fig5_panels",
+    "fig6_panels",
     "fig7_edge_map",
     "fig7_panels",
+    "fig11_panels",
     "framed_camera",
     "illustrate",
     "nut_camera",
     "oblique_camera",
     "shade_image",
     "signed_to_grey",
+    "write_panels",
 ]
