@@ -269,15 +269,19 @@ def test_run_demo_files(demo):
     assert sorted(files) == sorted(outdir.iterdir())  # nothing written beside them
     pngs = [p for p in files if p.suffix == ".png"]
     # per scene 9 channels + shade + montage, + terrain elevation; then the edge figures:
-    # Fig. 3 (7 panels + montage) and Fig. 7 (8 panels + montage)
-    assert len(pngs) == 2 * 11 + 1 + 8 + 9
+    # Fig. 3 (7 panels + montage) and Fig. 7 (8 panels + montage); then the contour figures:
+    # Fig. 5 (5 panels + montage), Fig. 6 (3 + montage) and Fig. 11 (7 + montage)
+    assert len(pngs) == 2 * 11 + 1 + 8 + 9 + 6 + 4 + 8
     for p in files:
         assert p.is_file() and p.stat().st_size > 0
+    contour_figures = ("fig5_", "fig6_", "fig11_")
     for p in pngs:
         with Image.open(p) as im:
             assert im.format == "PNG"
             if p.stem.endswith("montage"):
                 assert im.size[0] > WINDOW[0] and im.size[1] > WINDOW[1]
+            elif p.name.startswith(contour_figures):  # square, as large as the window allows
+                assert im.size == (min(WINDOW), min(WINDOW))
             else:
                 assert im.size == WINDOW
     page = (outdir / "index.html").read_text(encoding="utf-8")
@@ -318,7 +322,7 @@ def test_run_demo_edge_figures(demo):
         assert f"fig7_{key}.png" in names
     page = (outdir / "index.html").read_text(encoding="utf-8")
     assert "Fig. 3" in page and "Fig. 7" in page
-    assert page.count("Timings:") == 4
+    assert page.count("Timings:") == 2 + 2 + 3  # scenes, edge and contour figures
 
     def grey(name):
         with Image.open(outdir / name) as im:
@@ -332,3 +336,36 @@ def test_run_demo_edge_figures(demo):
     # the literal profile image (Eq. 3) draws the outline of the nut: black ink on white
     prof = grey("fig3_profile.png")
     assert prof.min() == 0 and np.median(prof) == 255
+
+
+def test_run_demo_contour_figures(demo):
+    outdir, files = demo
+    names = {p.name for p in files}
+    for key in ("a_black", "b_grey", "f1_bilevel", "f1_linear", "f1_smooth"):
+        assert f"fig5_{key}.png" in names
+    for key in ("contours", "hatching", "hatching_exact"):
+        assert f"fig6_{key}.png" in names
+    for key in ("wz", "cn", "cn_unthinned", "majors", "sh", "bands", "mx3"):
+        assert f"fig11_{key}.png" in names
+    page = (outdir / "index.html").read_text(encoding="utf-8")
+    for fig in ("Fig. 5", "Fig. 6", "Fig. 11"):
+        assert f"Saito &amp; Takahashi 1990 {fig}" in page
+    # captions from the recipe, and timings without a capture
+    assert "(mx3) combination of the contours" in page
+    assert "Timings: contour filters" in page and "Timings: hatching filters" in page
+
+    def grey(name):
+        with Image.open(outdir / name) as im:
+            return np.asarray(im.convert("L")).astype(int)
+
+    # Fig. 5 (a): black corners and white centre; (b): grey corners
+    a, b = grey("fig5_a_black.png"), grey("fig5_b_grey.png")
+    n = a.shape[0]
+    c = n // 2
+    assert a[:4, :4].max() < 30 and abs(b[:4, :4].mean() - 128) < 12
+    assert a[c - 1 : c + 1, c - 1 : c + 1].min() > 200
+    # Fig. 11: the map is in colour, the contour image black on white
+    with Image.open(outdir / "fig11_mx3.png") as im:
+        assert im.mode == "RGB"
+    cn = grey("fig11_cn.png")
+    assert cn.min() == 0 and np.median(cn) == 255
