@@ -86,6 +86,9 @@ def _suppress(x, a, b, c, d, e, f, g, h, k, aux, prm):
     return aux / max(_ONE, t * t)
 
 
+# The contour kernels may fuse a * b + c into one FMA ("contract": no change to NaN/inf
+# handling, ~15% faster); the others keep the strict order their tests compare against.
+
 # Operator codes: they pick the border rule and the neutral value; the operator itself is
 # passed to the row loop as a function, so each kernel compiles only its own operator.
 SOBEL, SECOND, C1, DIAG_DEPTH, NORMALIZE, SUPPRESS, CONTOUR, LEVELS, HATCH = range(9)
@@ -331,17 +334,17 @@ def _k_suppress(img, m, k, aux, prm, out):
     _rows(SUPPRESS, _suppress, img, m, k, aux, prm, out)
 
 
-@njit(parallel=True, cache=True)
+@njit(parallel=True, cache=True, fastmath={"contract"})
 def _k_contour(img, m, k, aux, prm, out):
     _rows(CONTOUR, _contour, img, m, k, aux, prm, out)
 
 
-@njit(parallel=True, cache=True)
+@njit(parallel=True, cache=True, fastmath={"contract"})
 def _k_levels(img, m, k, aux, prm, out):
     _rows(LEVELS, _levels, img, m, k, aux, prm, out)
 
 
-@njit(parallel=True, cache=True)
+@njit(parallel=True, cache=True, fastmath={"contract"})
 def _k_hatch(img, m, k, aux, prm, out):
     _rows(HATCH, _hatch, img, m, k, aux, prm, out)
 
