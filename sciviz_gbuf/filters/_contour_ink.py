@@ -8,10 +8,10 @@ row loop still vectorises. Levels of :func:`levels_ink` follow the fixed slots.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
-from numba import njit
+from llvmlite import ir
+from numba import njit, types
+from numba.extending import intrinsic
 
 # Slots of ``prm``. The line profile f1 at distance t (px) from a line's centre is
 # ``cap * P(clip(a - b t, 0, 1))`` with ``P(v) = v (p1 + v (p2 + v p3))``: see ``line_params``.
@@ -41,6 +41,43 @@ _H = np.float32(0.5)
 _ONE = np.float32(1.0)
 _BIG = np.float32(1e30)
 _TINY = np.float32(1e-30)
+
+
+@intrinsic
+def _bits(typingctx, x):
+    """The bits of a float32 as an int32 (a bitcast, which vectorises, unlike frexp)."""
+    if isinstance(x, types.Float) and x.bitwidth == 32:
+
+        def codegen(context, builder, signature, args):
+            return builder.bitcast(args[0], ir.IntType(32))
+
+        return types.int32(x), codegen
+    return None
+
+
+@intrinsic
+def _float(typingctx, i):
+    """The float32 with the low 32 bits of an integer (numba widens int32 arithmetic)."""
+    if isinstance(i, types.Integer):
+
+        def codegen(context, builder, signature, args):
+            v = args[0]
+            if i.bitwidth > 32:
+                v = builder.trunc(v, ir.IntType(32))
+            return builder.bitcast(v, ir.FloatType())
+
+        return types.float32(i), codegen
+    return None
+
+
+@njit(inline="always", cache=True)
+def _octave(y):
+    """``(1 / m, 2^e)`` with ``y = m 2^e``, ``m`` in [0.5, 1), for ``y`` clamped to
+    [1e-30, 1e30] (frexp from the float's exponent and mantissa bits)."""
+    b = _bits(np.float32(min(max(y, _TINY), _BIG)))
+    biased = (b >> 23) & 0xFF  # e + 126
+    m = _float((b & 0x807FFFFF) | (126 << 23))
+    return _ONE / m, _float((biased + 1) << 23)
 
 
 @njit(inline="always", cache=True)
@@ -125,10 +162,10 @@ def hatch_ink(x, g, prm):
     ``SWITCH * d_i``, so the spacing stays near ``d_i`` whatever the gradient.
     """
     di = prm[SPACING]
-    m, e = math.frexp(di * g / prm[Q])  # y = m 2^e, m in [0.5, 1): 2^e / y in (1, 2]
-    ratio = _ONE / np.float32(m)
+    # Eq. 19-20: with d_i g / p_d = m 2^n, m in [0.5, 1), p_n = 2^n p_d lies (1/m) d_i apart.
+    ratio, two_n = _octave(di * g / prm[Q])
     s = di * ratio  # on-screen spacing of the p_n lines
-    pn = prm[Q] * np.float32(math.ldexp(1.0, e))
+    pn = prm[Q] * two_n
     r = (x - prm[BASE]) / pn
     frac = abs(r - np.floor(r + _H))
     a, cap = prm[LINE_A], prm[LINE_CAP]

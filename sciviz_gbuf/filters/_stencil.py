@@ -52,22 +52,23 @@ def _second(x, a, b, c, d, e, f, g, h, k, aux, prm):
 
 @njit(inline="always", cache=True)
 def _c1(x, a, b, c, d, e, f, g, h, k, aux, prm):
+    # float32 weights: an int 2 would promote the whole sum to float64 (half the SIMD width).
     return (
         abs(a - x)
-        + 2 * abs(b - x)
+        + _TWO * abs(b - x)
         + abs(c - x)
-        + 2 * abs(d - x)
-        + 2 * abs(e - x)
+        + _TWO * abs(d - x)
+        + _TWO * abs(e - x)
         + abs(f - x)
-        + 2 * abs(g - x)
+        + _TWO * abs(g - x)
         + abs(h - x)
     ) * _E
 
 
 @njit(inline="always", cache=True)
 def _diag_depth(x, a, b, c, d, e, f, g, h, k, aux, prm):
-    s = 1 - _H * min(abs(a - h), _TWO)
-    t = 1 - _H * min(abs(c - f), _TWO)
+    s = _ONE - _H * min(abs(a - h), _TWO)
+    t = _ONE - _H * min(abs(c - f), _TWO)
     return s * s * t * t
 
 
