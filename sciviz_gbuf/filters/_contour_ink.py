@@ -14,7 +14,8 @@ from numba import njit, types
 from numba.extending import intrinsic
 
 # Slots of ``prm``. The line profile f1 at distance t (px) from a line's centre is
-# ``cap * P(clip(a - b t, 0, 1))`` with ``P(v) = v (p1 + v (p2 + v p3))``: see ``line_params``.
+# ``cap * P(clip(a - b t, 0, 1))`` with ``P(v) = v (p1 + v (p2 + v p3))``; ``a`` and ``cap``
+# come from ``contours._line_shape``.
 BASE = 0  # p0 of Eq. 12 (hatching: the offset of the line family)
 Q = 1  # interval q (hatching: p_d of Eq. 19)
 LINE_A = 2  # a and cap of the (minor) lines

@@ -180,17 +180,28 @@ def _pixel(code, op, neutral, u, mid, lo, mu, mm, ml, up, dn, c, cl, cr, lf, rt,
 
 @njit(inline="always", cache=True)
 def _rows_valid(code, u, mid, lo, mu, mm, ml, xr, masked):
-    """True if three rows (and the aux row, for Eq. 4) are finite and covered throughout."""
-    bad = False
-    for c in range(mid.shape[0]):
-        bad |= not ((u[c] - u[c] == 0) & (mid[c] - mid[c] == 0) & (lo[c] - lo[c] == 0))
-    if masked:
-        for c in range(mid.shape[0]):
-            bad |= not (mu[c] & mm[c] & ml[c])
-    if code == SUPPRESS:
-        for c in range(mid.shape[0]):
-            bad |= not (xr[c] - xr[c] == 0)
-    return not bad
+    """True if three rows (and the aux row, for Eq. 4) are finite and covered throughout.
+
+    Checked in blocks, so a row that meets the background early (most rows of a G-buffer)
+    costs one block, not a scan of the whole row."""
+    w = mid.shape[0]
+    for c0 in range(0, w, _BLOCK):
+        c1 = min(c0 + _BLOCK, w)
+        bad = False
+        if masked:
+            for c in range(c0, c1):
+                bad |= not (mu[c] & mm[c] & ml[c])
+        for c in range(c0, c1):
+            bad |= not ((u[c] - u[c] == 0) & (mid[c] - mid[c] == 0) & (lo[c] - lo[c] == 0))
+        if code == SUPPRESS:
+            for c in range(c0, c1):
+                bad |= not (xr[c] - xr[c] == 0)
+        if bad:
+            return False
+    return True
+
+
+_BLOCK = 256
 
 
 @njit(inline="always", cache=True)
