@@ -239,7 +239,7 @@ def hatching(
     interval: float = 1.0,
     base: float = 0.0,
     profile: str = "linear",
-    transition: float = 0.2,
+    transition: float = 0.04,
     gradient: np.ndarray | None = None,
 ) -> np.ndarray:
     """Curved hatching: lines of a scalar field at a constant on-screen spacing (Eq. 17-21).
@@ -255,7 +255,7 @@ def hatching(
     field : (H, W) array
         The scalar field whose level lines are the hatch lines (NaN/inf: masked).
     spacing : float > 0, default: 8
-        ``d_i``: the on-screen spacing in pixels to keep; it stays within about +-33%.
+        ``d_i``: the on-screen spacing in pixels to keep; it stays within +-35%.
     width : float > 0, default: 1
         Line width ``d`` in pixels; keep it well below ``spacing``.
     mask : (H, W) bool, optional
@@ -265,11 +265,12 @@ def hatching(
         Offset of the line family.
     profile : {"linear", "smooth", "bilevel"}
         Line profile ``f1``, as in :func:`contour_lines`.
-    transition : float in (0, 1], default: 0.2
-        How gradually the in-between lines fade in, as a fraction of the doubling of the
-        spacing. 1 is Eq. 18 exactly (constant mean ink density, but faint lines where the
-        spacing is up to 1.5 ``d_i``); small values switch them on near 4/3 of the interval,
-        which keeps every visible spacing within +-33% of ``d_i``.
+    transition : float in (0, 1], default: 0.04
+        Over what fraction of a doubling of the spacing the in-between lines fade in. The
+        default switches them on crisply around 4/3 of ``d_i``, which keeps every visible
+        spacing within +-35% of ``d_i`` whatever threshold counts a line as visible. 1 is
+        Eq. 18 exactly: a linear fade that keeps the mean ink density constant but leaves
+        faint lines where the spacing is up to 1.5 ``d_i``.
     gradient : (H, W) array, optional
         Your own gradient magnitude of ``field`` in field units per pixel, instead of Eq. 9.
 

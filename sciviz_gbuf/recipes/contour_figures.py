@@ -58,7 +58,7 @@ CONTOUR_CAPTIONS = {
     "contours": "contours of s = xy at a regular interval: far apart at the flat centre, "
     "crowded in the corners",
     "hatching": "curved hatching of s = xy (Eq. 17-21, binary thinning out): lines at a "
-    "near-constant spacing everywhere; in-between lines fade in quickly (transition 0.2)",
+    "near-constant spacing everywhere; in-between lines start crisply (default transition)",
     "hatching_exact": "curved hatching with Eq. 18 exactly (transition 1): constant mean ink, "
     "but faint in-between lines where the spacing grows",
     "wz": "(wz) original height data: the Jacksboro DEM resampled to square pixels, "
@@ -226,7 +226,7 @@ def fig6_panels(
     Returns
     -------
     list of (key, title, image)
-        ``contours``, ``hatching`` (``transition=0.2``, the filter's default) and if ``exact``
+        ``contours``, ``hatching`` (the filter's default ``transition``) and if ``exact``
         ``hatching_exact``; grey paper ``1 - ink`` of shape ``(size, size)``.
     """
     s, px = xy_field(size)
