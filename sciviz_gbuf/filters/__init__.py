@@ -2,9 +2,11 @@
 returning new float32 arrays; inputs are never modified. Shades are in [0, 1] with 1 = lit;
 line images are ink in [0, 1] with 1 = full ink (signed images are documented as such)."""
 
+from .bands import BATHYMETRIC, HYPSOMETRIC, color_bands
 from .contour_vectors import ContourPolyline, contour_polylines, polylines_to_geojson
 from .contours import contour_lines, hatching
 from .edges import crease_edges, edge_map, enhance, id_edges, internal_edges, profile_edges
+from .hillshade import hillshade
 from .operators import (
     c1_discontinuity,
     diagonal_depth_discontinuity,
@@ -17,8 +19,11 @@ from .operators import (
 from .shading import lambert
 
 __all__ = [
+    "BATHYMETRIC",
+    "HYPSOMETRIC",
     "ContourPolyline",
     "c1_discontinuity",
+    "color_bands",
     "contour_lines",
     "contour_polylines",
     "crease_edges",
@@ -27,6 +32,7 @@ __all__ = [
     "edge_map",
     "enhance",
     "hatching",
+    "hillshade",
     "id_edges",
     "internal_edges",
     "lambert",

@@ -1,0 +1,121 @@
+"""Colour bands: discrete tints at the right edges, continuous ramps, topo-bathymetry, nodata."""
+
+from __future__ import annotations
+
+import matplotlib
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra import numpy as hnp
+
+from sciviz_gbuf.errors import InputError
+from sciviz_gbuf.filters.bands import BATHYMETRIC, HYPSOMETRIC, color_bands
+
+
+def ramp(lo: float, hi: float, n: int = 200) -> np.ndarray:
+    return np.tile(np.linspace(lo, hi, n, dtype=np.float32), (4, 1))
+
+
+def test_regular_bands_change_colour_exactly_at_the_band_edges():
+    h = ramp(0.0, 99.9, 1000)  # 0.1 m per column
+    rgba = color_bands(h, interval=20.0)
+    colours = np.unique(rgba[0, :, :3], axis=0)
+    assert len(colours) == 5
+    change = np.nonzero(np.any(np.diff(rgba[0, :, :3], axis=0) != 0, axis=1))[0] + 1
+    np.testing.assert_allclose(h[0, change], [20, 40, 60, 80], atol=0.06)
+    # each band has the colour of its middle on the continuous ramp
+    cont = color_bands(np.array([[10.0, 30.0, 50.0, 70.0, 90.0]]), vmin=0, vmax=99.9)
+    band = color_bands(np.array([[1.0, 21.0, 41.0, 61.0, 81.0]]), interval=20.0, vmin=0, vmax=99.9)
+    np.testing.assert_allclose(band, cont, atol=1e-6)
+
+
+def test_explicit_levels_and_base():
+    h = ramp(0.0, 10.0, 101)
+    rgba = color_bands(h, levels=[2.0, 5.0, 9.0], cmap="gray")
+    grey = rgba[0, :, 0]
+    for a, b in ((0, 19), (21, 49), (51, 89), (91, 100)):
+        assert np.ptp(grey[a : b + 1]) == 0  # one colour per band
+    assert grey[19] < grey[21] < grey[51] < grey[91]
+    shifted = color_bands(h, interval=4.0, base=1.0, cmap="gray")[0, :, 0]
+    edges = np.nonzero(np.diff(shifted))[0] + 1
+    np.testing.assert_allclose(h[0, edges], [1.0, 5.0, 9.0], atol=0.1)
+
+
+def test_continuous_ramp_follows_the_colour_map():
+    h = ramp(-5.0, 5.0)
+    rgba = color_bands(h, cmap="gray", vmin=-5, vmax=5)
+    g = rgba[0, :, 0]
+    assert np.all(np.diff(g) >= 0) and g[0] < 0.01 and g[-1] > 0.99
+    viridis = color_bands(h, cmap=matplotlib.colormaps["viridis"])[0]
+    np.testing.assert_allclose(viridis[0, :3], matplotlib.colormaps["viridis"](0.0)[:3], atol=2e-3)
+
+
+def test_sea_level_splits_sea_and_land_maps():
+    h = ramp(-4000.0, 3000.0, 701)
+    rgba = color_bands(h, sea_level=0.0)
+    sea, land = rgba[0, h[0] < 0, :3], rgba[0, h[0] >= 0, :3]
+    assert np.all(sea[:, 2] > sea[:, 0])  # blue under the sea
+    np.testing.assert_allclose(sea[0], BATHYMETRIC(0.0)[:3], atol=2e-3)  # deepest: dark end
+    np.testing.assert_allclose(land[0], HYPSOMETRIC(0.0)[:3], atol=2e-3)  # shore: lowland
+    np.testing.assert_allclose(land[-1], HYPSOMETRIC(1.0)[:3], atol=2e-3)
+    banded = color_bands(h, interval=500.0, sea_level=0.0)
+    assert np.all(banded[0, h[0] < 0, 2] > banded[0, h[0] < 0, 0])
+
+
+def test_nodata_is_transparent_and_inputs_untouched():
+    h = ramp(0.0, 10.0)
+    h[1, 5:50] = np.nan
+    m = np.ones(h.shape, bool)
+    m[2, :10] = False
+    before = h.copy()
+    rgba = color_bands(h, interval=2.0, mask=m)
+    assert rgba.dtype == np.float32 and rgba.shape == (*h.shape, 4)
+    nodata = ~np.isfinite(h) | ~m
+    assert np.all(rgba[nodata] == 0) and np.all(rgba[~nodata, 3] == 1)
+    np.testing.assert_array_equal(h, before, strict=True)
+    assert not color_bands(np.full((3, 3), np.nan)).any()
+
+
+def test_constant_image():
+    rgba = color_bands(np.full((5, 5), 7.0))
+    np.testing.assert_allclose(rgba[..., :3], np.broadcast_to(rgba[0, 0, :3], (5, 5, 3)))
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "word"),
+    [
+        ({"interval": 0}, "interval"),
+        ({"interval": 1.0, "levels": [1]}, "not both"),
+        ({"levels": []}, "levels"),
+        ({"levels": [np.nan]}, "levels"),
+        ({"cmap": "no_such_map"}, "cmap"),
+        ({"sea_cmap": 3}, "sea_cmap"),
+        ({"vmin": 5.0, "vmax": 1.0}, "vmin"),
+        ({"sea_level": np.inf}, "sea_level"),
+        ({"base": np.nan}, "base"),
+        ({"mask": np.ones((2, 2), bool)}, "mask"),
+    ],
+)
+def test_rejects(kwargs, word):
+    with pytest.raises(InputError, match=word):
+        color_bands(ramp(0.0, 1.0, 10), **kwargs)
+
+
+@settings(max_examples=100, deadline=None)
+@given(
+    h=hnp.arrays(
+        np.float32,
+        hnp.array_shapes(min_dims=2, max_dims=2, min_side=1, max_side=8),
+        elements=st.one_of(
+            st.floats(-1e6, 1e6, width=32), st.sampled_from([np.nan, np.inf, -np.inf, 3e38])
+        ),
+    ),
+    interval=st.one_of(st.none(), st.floats(1e-3, 1e5)),
+    sea=st.one_of(st.none(), st.floats(-10, 10)),
+)
+def test_odd_inputs(h, interval, sea):
+    rgba = color_bands(h, interval=interval, sea_level=sea)
+    assert rgba.shape == (*h.shape, 4) and np.all(np.isfinite(rgba))
+    assert rgba.min() >= 0 and rgba.max() <= 1
+    assert set(np.unique(rgba[..., 3])) <= {0.0, 1.0}

@@ -1,0 +1,326 @@
+"""read_dem: ESRI ASCII, SRTM .hgt, .npy/.npz, GeoTIFF and arrays -> north-up DEM in metres."""
+
+from __future__ import annotations
+
+import math
+import struct
+import sys
+import warnings
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+
+from sciviz_gbuf.datasets import metres_per_degree
+from sciviz_gbuf.errors import InputError
+from sciviz_gbuf.readers import DEM, read_dem
+
+SRTM_ASC = "SRTMGL3_40.09_-105.55_40.21_-105.35.asc"
+
+
+def asc_rows(path) -> tuple[dict[str, str], list[list[str]]]:
+    """Header and rows of an ESRI ASCII grid, parsed here by hand (no package code)."""
+    lines = path.read_text().splitlines()
+    header = {ln.split()[0].lower(): ln.split()[1] for ln in lines[:6]}
+    return header, [ln.split() for ln in lines[6:] if ln.strip()]
+
+
+def write_asc(path, values: np.ndarray, *, cellsize=10.0, xll=100.0, yll=200.0, nodata=-9999):
+    """A minimal ESRI ASCII grid writer for round trips (rows north to south)."""
+    h, w = values.shape
+    head = f"ncols {w}\nnrows {h}\nxllcorner {xll}\nyllcorner {yll}\ncellsize {cellsize}\n"
+    body = "\n".join(" ".join(repr(float(v)) for v in row) for row in values)
+    path.write_text(head + f"NODATA_value {nodata}\n" + body + "\n")
+
+
+# --- ESRI ASCII grids -------------------------------------------------------------------------
+
+
+def test_asc_hugo_site_values_and_nodata(shared_data):
+    path = shared_data / "dem" / "hugo_site.asc"
+    header, rows = asc_rows(path)
+    dem = read_dem(path)
+    assert isinstance(dem, DEM)
+    assert dem.shape == (55, 76) == (int(header["nrows"]), int(header["ncols"]))
+    assert dem.heights.dtype == np.float32
+    text = np.array(rows, dtype=float)
+    np.testing.assert_array_equal(np.isnan(dem.heights), text == -9999)
+    np.testing.assert_array_equal(dem.mask, text != -9999)
+    assert int(dem.mask.sum()) == 4180 - 2028  # MANIFEST: 2028 NODATA cells
+    # first valid cell in file order: row 2, column 36 holds 1708 (north row first)
+    assert float(rows[2][36]) == 1708 and dem.heights[2, 36] == 1708
+    assert dem.transform == (0.0, 10.0, 0.0, 550.0, 0.0, -10.0)
+    assert dem.pixel_size == (10.0, 10.0)
+    assert not dem.geographic and dem.crs is None
+    assert dem.source == str(path)
+    assert dem.bounds == (0.0, 760.0, 0.0, 550.0)
+
+
+def test_asc_pre_runout_last_column_nodata(shared_data):
+    path = shared_data / "dem" / "pre_runout_DEM.asc"
+    _, rows = asc_rows(path)
+    dem = read_dem(path)
+    assert dem.shape == (122, 80)
+    assert np.isnan(dem.heights[:, -1]).all() and dem.mask[:, :-1].all()
+    assert dem.heights[0, 0] == np.float32(rows[0][0]) == np.float32(479.9628)
+    assert dem.heights[0, 78] == np.float32(rows[0][78])
+    assert dem.heights[-1, 0] == np.float32(rows[-1][0]) == np.float32(200.9864)
+    # north up: the first text row is higher ground than the last one here
+    assert np.nanmean(dem.heights[0]) > np.nanmean(dem.heights[-1])
+    x0, dx, _, y0, _, dy = dem.transform
+    assert x0 == pytest.approx(361015.59563119) and dx == 10.0 and dy == -10.0
+    assert y0 == pytest.approx(70223.434086869 + 122 * 10)
+
+
+def test_asc_degrees_get_metres_with_warning(shared_data):
+    path = shared_data / "dem" / SRTM_ASC
+    header, rows = asc_rows(path)
+    with pytest.warns(UserWarning, match="taken as degrees"):
+        dem = read_dem(path)
+    assert dem.geographic and dem.shape == (144, 240)
+    assert dem.heights[0, 0] == float(rows[0][0]) == 2569
+    assert dem.heights[-1, -1] == float(rows[-1][-1])
+    cell = float(header["cellsize"])
+    lat = float(header["yllcorner"]) + 144 * cell / 2
+    assert lat == pytest.approx(40.1504, abs=1e-4)
+    m_lon, m_lat = metres_per_degree(lat)
+    assert dem.pixel_size == pytest.approx((cell * m_lon, cell * m_lat), rel=1e-12)
+    # spherical cross-check (111320 m per degree x cos(latitude)): within 0.5 %
+    assert dem.pixel_size[0] == pytest.approx(cell * 111320 * math.cos(math.radians(lat)), rel=5e-3)
+    assert dem.pixel_size == pytest.approx((71.005, 92.531), abs=1e-3)
+    # explicit geographic=True: no warning; geographic=False: taken as metres, on request only
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert read_dem(path, geographic=True).pixel_size == dem.pixel_size
+        assert read_dem(path, geographic=False).pixel_size == pytest.approx((cell, cell))
+
+
+def test_asc_prj_geographic_and_projected(tmp_path):
+    values = np.arange(12, dtype=float).reshape(3, 4)
+    write_asc(tmp_path / "g.asc", values, cellsize=0.01, xll=5.0, yll=45.0)
+    (tmp_path / "g.prj").write_text('GEOGCS["WGS 84",DATUM["WGS_1984"]]\n')
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a .prj answers the question: no guessing warning
+        geo = read_dem(tmp_path / "g.asc")
+    assert geo.geographic and geo.crs.startswith('GEOGCS["WGS 84"')
+    m_lon, m_lat = metres_per_degree(45.015)
+    assert geo.pixel_size == pytest.approx((0.01 * m_lon, 0.01 * m_lat))
+    write_asc(tmp_path / "p.asc", values, cellsize=0.01, xll=5.0, yll=45.0)
+    (tmp_path / "p.prj").write_text('PROJCS["UTM 32N",GEOGCS["WGS 84"],UNIT["metre",1]]')
+    proj = read_dem(tmp_path / "p.asc")
+    assert not proj.geographic and proj.pixel_size == (0.01, 0.01)
+
+
+def test_asc_centre_keys_dx_dy_and_case(tmp_path):
+    path = tmp_path / "c.asc"
+    path.write_text(
+        "NCOLS 3\nNROWS 2\nXLLCENTER 10\nYLLCENTER 20\nDX 2\nDY 4\nnodata_VALUE -1\n1 2 3\n4 -1 6\n"
+    )
+    dem = read_dem(path)
+    assert dem.transform == (9.0, 2.0, 0.0, 26.0, 0.0, -4.0)
+    assert dem.pixel_size == (2.0, 4.0)
+    np.testing.assert_array_equal(dem.mask, [[True, True, True], [True, False, True]])
+    assert dem.heights[1, 2] == 6
+
+
+def test_asc_wrong_row_count_names_file_and_counts(tmp_path):
+    path = tmp_path / "short.asc"
+    write_asc(path, np.ones((3, 4)))
+    path.write_text(path.read_text().replace("nrows 3", "nrows 5"))
+    with pytest.raises(InputError, match=r"short\.asc.*nrows=5 x ncols=4 = 20.*holds 12"):
+        read_dem(path)
+
+
+def test_asc_bad_header(tmp_path):
+    path = tmp_path / "bad.asc"
+    path.write_text("ncols 2\n1 2\n3 4\n")
+    with pytest.raises(InputError, match=r"bad\.asc.*not an ESRI ASCII grid"):
+        read_dem(path)
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    arrays(
+        np.float64,
+        st.tuples(st.integers(1, 7), st.integers(1, 7)),
+        elements=st.integers(-500, 9000),
+    ),
+    st.data(),
+)
+def test_asc_and_npy_round_trip_odd_arrays(tmp_path_factory, values, data):
+    tmp = tmp_path_factory.mktemp("rt")
+    holes = data.draw(arrays(np.bool_, values.shape))
+    values = np.where(holes, -9999.0, values)
+    write_asc(tmp / "a.asc", values, cellsize=2.5)
+    dem = read_dem(tmp / "a.asc")
+    np.testing.assert_array_equal(dem.mask, ~holes)
+    np.testing.assert_array_equal(dem.heights[~holes], values[~holes])
+    assert dem.pixel_size == (2.5, 2.5) and dem.shape == values.shape
+    np.save(tmp / "a.npy", values)
+    npy = read_dem(tmp / "a.npy", nodata=-9999, spacing=(3.0, 4.0))
+    np.testing.assert_array_equal(npy.heights, dem.heights)
+    assert npy.pixel_size == (3.0, 4.0)
+    assert npy.transform == (0.0, 3.0, 0.0, 4.0 * values.shape[0], 0.0, -4.0)
+
+
+# --- SRTM .hgt ----------------------------------------------------------------------------------
+
+
+def test_hgt_tile_georeference_and_values(shared_data):
+    path = shared_data / "dem" / "N10W110.hgt"
+    raw = path.read_bytes()
+    dem = read_dem(path)
+    assert dem.shape == (1201, 1201) and dem.geographic and dem.crs == "EPSG:4326"
+    for r, c in [(0, 0), (600, 600), (1200, 1200), (123, 987)]:
+        (expected,) = struct.unpack(">h", raw[2 * (r * 1201 + c) : 2 * (r * 1201 + c) + 2])
+        assert dem.heights[r, c] == expected
+    d = 1 / 1200
+    assert dem.transform == pytest.approx((-110 - d / 2, d, 0, 11 + d / 2, 0, -d), abs=1e-12)
+    assert dem.bounds == pytest.approx((-110 - d / 2, -109 + d / 2, 10 - d / 2, 11 + d / 2))
+    m_lon, m_lat = metres_per_degree(10.5)
+    assert dem.pixel_size == pytest.approx((d * m_lon, d * m_lat), rel=1e-9)
+    assert dem.heights.max() <= 9 + 1e-6  # MANIFEST: Clipperton atoll up to 9 m
+
+
+def test_hgt_round_trip_voids_and_southern_name(tmp_path):
+    values = np.zeros((1201, 1201), dtype=">i2")
+    values[0, 0], values[5, 7], values[1200, 3] = -32768, 1234, -20
+    path = tmp_path / "s05e012.hgt"
+    values.tofile(path)
+    dem = read_dem(path)
+    assert np.isnan(dem.heights[0, 0]) and int(dem.mask.sum()) == 1201**2 - 1
+    assert dem.heights[5, 7] == 1234 and dem.heights[1200, 3] == -20
+    x0, _, _, y0, _, _ = dem.transform
+    assert x0 == pytest.approx(12 - 0.5 / 1200) and y0 == pytest.approx(-4 + 0.5 / 1200)
+    assert path.read_bytes() == values.tobytes()  # input untouched
+
+
+def test_hgt_truncated_and_unnamed(tmp_path):
+    path = tmp_path / "N10W110.hgt"
+    path.write_bytes(b"\0" * 1000)
+    with pytest.raises(InputError, match=r"N10W110\.hgt: 1000 bytes is not an SRTM"):
+        read_dem(path)
+    np.zeros((1201, 1201), ">i2").tofile(tmp_path / "tile.hgt")
+    with pytest.raises(InputError, match=r"tile\.hgt.*by its name"):
+        read_dem(tmp_path / "tile.hgt")
+
+
+# --- numpy: .npz, .npy, arrays ----------------------------------------------------------------
+
+
+def test_npz_jacksboro_north_up_in_degrees():
+    from matplotlib import cbook
+
+    data = cbook.get_sample_data("jacksboro_fault_dem.npz")
+    path = data.fid.name if hasattr(data, "fid") else data.name
+    with np.load(path) as f:
+        elev = f["elevation"]
+    with pytest.warns(UserWarning, match="taken as degrees"):
+        dem = read_dem(path)
+    assert dem.shape == (344, 403) and dem.geographic
+    np.testing.assert_array_equal(dem.heights, elev.astype(np.float32))
+    west, east, south, north = dem.bounds
+    assert (west, east) == pytest.approx((-84.41375, -84.07791666666667))
+    assert (south, north) == pytest.approx((36.44625, 36.73291666666667))  # ymin > ymax in file
+    m_lon, m_lat = metres_per_degree((south + north) / 2)
+    assert dem.pixel_size == pytest.approx((m_lon / 1200, m_lat / 1200))
+
+
+def test_array_spacing_transform_and_errors():
+    a = np.arange(6, dtype=np.int16).reshape(2, 3)
+    dem = read_dem(a)
+    assert dem.pixel_size == (1.0, 1.0) and dem.source is None and not dem.geographic
+    assert dem.transform == (0.0, 1.0, 0.0, 2.0, 0.0, -1.0)
+    assert read_dem(a, spacing=5).pixel_size == (5.0, 5.0)
+    geo = read_dem(a, transform=(7.0, 0.5, 0.0, 50.0, 0.0, -0.5), crs="EPSG:4326")
+    assert geo.geographic and geo.crs == "EPSG:4326"
+    m_lon, m_lat = metres_per_degree(49.5)
+    assert geo.pixel_size == pytest.approx((0.5 * m_lon, 0.5 * m_lat))
+    assert np.isnan(read_dem(a, nodata=4).heights[1, 1])
+    f = np.array([[1.0, np.inf], [np.nan, 2.0]])
+    np.testing.assert_array_equal(read_dem(f).mask, [[True, False], [False, True]])
+    assert np.isfinite(f).sum() == 2 and f[0, 1] == np.inf  # input untouched
+    with pytest.raises(InputError, match="2-D"):
+        read_dem(np.zeros((2, 2, 2)))
+    with pytest.raises(InputError, match="numeric"):
+        read_dem(np.array([["a", "b"]]))
+    with pytest.raises(InputError, match="spacing"):
+        read_dem(a, spacing=(1, -1))
+    with pytest.raises(InputError, match="not both"):
+        read_dem(a, spacing=1, transform=(0, 1, 0, 0, 0, -1))
+    with pytest.raises(InputError, match="needs a transform"):
+        read_dem(a, geographic=True)
+
+
+def test_file_errors(tmp_path, shared_data):
+    with pytest.raises(InputError, match=r"nothere\.asc: no such DEM file"):
+        read_dem(tmp_path / "nothere.asc")
+    (tmp_path / "x.xyz").write_text("1 2 3")
+    with pytest.raises(InputError, match=r"x\.xyz: unknown DEM extension '\.xyz'"):
+        read_dem(tmp_path / "x.xyz")
+    np.save(tmp_path / "v.npy", np.zeros(5))
+    with pytest.raises(InputError, match=r"v\.npy: expected a non-empty 2-D array"):
+        read_dem(tmp_path / "v.npy")
+    with pytest.raises(InputError, match=r"hugo_site\.asc: spacing= is for sources without"):
+        read_dem(shared_data / "dem" / "hugo_site.asc", spacing=2)
+
+
+# --- GeoTIFF ------------------------------------------------------------------------------------
+
+
+def test_geotiff_round_trip(tmp_path):
+    rasterio = pytest.importorskip("rasterio")
+
+    def from_origin(west, north, xsize, ysize):
+        return rasterio.Affine(xsize, 0.0, west, 0.0, -ysize, north)
+
+    values = np.array([[1.5, 2.5, -1.0], [4.0, 5.0, 6.0]], dtype=np.float32)
+    path = tmp_path / "utm.tif"
+    profile = dict(driver="GTiff", width=3, height=2, count=1, dtype="float32", nodata=-1.0)
+    with rasterio.open(
+        path, "w", crs="EPSG:32613", transform=from_origin(450000, 4440000, 30, 20), **profile
+    ) as dst:
+        dst.write(values, 1)
+    dem = read_dem(path)
+    assert dem.crs == "EPSG:32613" and not dem.geographic
+    assert dem.transform == (450000.0, 30.0, 0.0, 4440000.0, 0.0, -20.0)
+    assert dem.pixel_size == (30.0, 20.0)
+    np.testing.assert_array_equal(dem.mask, [[True, True, False], [True, True, True]])
+    assert dem.heights[0, 1] == 2.5 and dem.heights[1, 0] == 4.0
+
+    geo_path = tmp_path / "geo.tif"
+    with rasterio.open(
+        geo_path, "w", crs="EPSG:4326", transform=from_origin(-105.5, 40.2, 0.001, 0.001), **profile
+    ) as dst:
+        dst.write(values, 1)
+    geo = read_dem(geo_path)
+    m_lon, m_lat = metres_per_degree(40.199)
+    assert geo.geographic and geo.pixel_size == pytest.approx((0.001 * m_lon, 0.001 * m_lat))
+
+
+@pytest.mark.filterwarnings("ignore:Dataset has no geotransform")
+def test_geotiff_rgb_and_ungeoreferenced(tmp_path):
+    rasterio = pytest.importorskip("rasterio")
+    rgb = tmp_path / "photo.tif"
+    with rasterio.open(rgb, "w", driver="GTiff", width=4, height=3, count=3, dtype="uint8") as dst:
+        dst.write(np.zeros((3, 3, 4), np.uint8))
+    with pytest.raises(InputError, match=r"photo\.tif: 3 uint8 bands look like an RGB"):
+        read_dem(rgb)
+    plain = tmp_path / "plain.tif"
+    with rasterio.open(
+        plain, "w", driver="GTiff", width=4, height=3, count=1, dtype="int16"
+    ) as dst:
+        dst.write(np.arange(12, dtype=np.int16).reshape(3, 4), 1)
+    with pytest.warns(UserWarning, match="without georeference"):
+        dem = read_dem(plain, spacing=2)
+    assert dem.pixel_size == (2.0, 2.0) and dem.crs is None and dem.heights[2, 3] == 11
+
+
+def test_geotiff_without_rasterio(tmp_path, monkeypatch):
+    path = tmp_path / "dem.tif"
+    path.write_bytes(b"II*\0")
+    monkeypatch.setitem(sys.modules, "rasterio", None)
+    with pytest.raises(InputError, match=r"dem\.tif: reading GeoTIFF needs rasterio.*\[geo\]"):
+        read_dem(path)
