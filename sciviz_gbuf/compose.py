@@ -50,6 +50,19 @@ def _mask(mask: object, shape: tuple[int, ...]) -> np.ndarray | None:
 
 
 # ---------------------------------------------------------------------------- channels
+def _colormap_of(cmap: str | object, name: str = "cmap"):
+    """A matplotlib colour map from its registered name, or the Colormap itself."""
+    import matplotlib
+
+    try:
+        cm = matplotlib.colormaps[cmap] if isinstance(cmap, str) else cmap
+    except KeyError:
+        raise InputError(f"{name}: unknown colour map {cmap!r}") from None
+    if not callable(cm):
+        raise InputError(f"{name}: expected a colour map name or Colormap, got {cmap!r}")
+    return cm
+
+
 def colorize(
     values: np.ndarray,
     *,
@@ -78,19 +91,13 @@ def colorize(
     -------
     (H, W, 3) float32 ndarray in [0, 1]
     """
-    import matplotlib
 
     v = _array(values, "values", 2)
     if not (np.issubdtype(v.dtype, np.number) or v.dtype == np.bool_) or np.iscomplexobj(v):
         raise InputError(f"values: expected real numbers, got dtype {v.dtype}")
     m = _mask(mask, v.shape)
     bg = _background(background)
-    try:
-        cm = matplotlib.colormaps[cmap] if isinstance(cmap, str) else cmap
-    except KeyError:
-        raise InputError(f"cmap: unknown colour map {cmap!r}") from None
-    if not callable(cm):
-        raise InputError(f"cmap: expected a colour map name or Colormap, got {cmap!r}")
+    cm = _colormap_of(cmap)
     v = v.astype(np.float64)
     valid = np.isfinite(v) if m is None else np.isfinite(v) & m
     lo, hi = _value_range(v, valid, vmin, vmax)

@@ -106,11 +106,17 @@ def _family(x, g, q, a, cap, prm):
 
 
 @njit(inline="always", cache=True)
+def _flat(c, g, prm):
+    """f_g of Eq. 11: fade to ``c_sparse`` below ``g_eps``."""
+    ws = min(g * prm[INV_GEPS], _ONE)
+    return ws * c + (_ONE - ws) * prm[C_SPARSE]
+
+
+@njit(inline="always", cache=True)
 def _flat_dense(c, g, s, prm):
     """f_g of Eq. 11 and 15: fade to ``c_sparse`` below ``g_eps``; where lines come closer than
     the dense spacing, fade to ``c_dense`` within one line width further."""
-    ws = min(g * prm[INV_GEPS], _ONE)
-    c = ws * c + (_ONE - ws) * prm[C_SPARSE]
+    c = _flat(c, g, prm)
     wd = min(max((s - prm[DENSE_AT]) * prm[INV_D] + _ONE, _Z), _ONE)
     return wd * c + (_ONE - wd) * prm[C_DENSE]
 
@@ -128,8 +134,7 @@ def regular_ink(x, g, prm):
     qm = prm[MAJOR_Q]
     if qm > 0:
         cm, _ = _family(x, g, qm, prm[MAJOR_A], prm[MAJOR_CAP], prm)
-        ws = min(g * prm[INV_GEPS], _ONE)
-        v = max(v, ws * cm + (_ONE - ws) * prm[C_SPARSE])
+        v = max(v, _flat(cm, g, prm))
     return _finite_ink(v)
 
 

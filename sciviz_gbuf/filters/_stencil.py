@@ -214,6 +214,7 @@ def _rows(code, op, img, m, k, aux, prm, out):
     """
     h, w = img.shape
     neutral = np.float32(1.0) if code == DIAG_DEPTH else np.float32(0.0)
+    masked = m.shape[0] > 1
     for r in prange(h):
         r = np.int64(r)
         up = r > 0
@@ -221,7 +222,7 @@ def _rows(code, op, img, m, k, aux, prm, out):
         ru = r - 1 if up else r
         rd = r + 1 if dn else r
         u, mid, lo = img[ru], img[r], img[rd]
-        if m.shape[0] > 1:
+        if masked:
             mu, mm, ml = m[ru], m[r], m[rd]
         else:
             mu, mm, ml = m[0], m[0], m[0]
@@ -249,7 +250,7 @@ def _rows(code, op, img, m, k, aux, prm, out):
             prm,
             o,
         )
-        if up & dn & _rows_valid(code, u, mid, lo, mu, mm, ml, xr, m.shape[0] > 1):
+        if up & dn & _rows_valid(code, u, mid, lo, mu, mm, ml, xr, masked):
             # Every neighbour is valid: the border rule is the identity, so skip it.
             for c in range(1, w - 1):
                 ax = xr[c] if code >= SUPPRESS else mid[c]

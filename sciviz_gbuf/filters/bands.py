@@ -8,8 +8,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from ..compose import _colormap_of
 from ..errors import InputError
-from .operators import _image, _mask, _positive
+from .operators import _finite, _image, _levels, _mask, _positive
 
 __all__ = ["BATHYMETRIC", "HYPSOMETRIC", "color_bands"]
 
@@ -42,21 +43,6 @@ BATHYMETRIC = _colormap("sciviz_bathymetric", _SEA)
 """Default sea colour map of :func:`color_bands`, deep to shallow."""
 
 
-def _cmap(cmap, default, name: str):
-    if cmap is None:
-        return default
-    if isinstance(cmap, str):
-        import matplotlib
-
-        try:
-            return matplotlib.colormaps[cmap]
-        except KeyError:
-            raise InputError(f"{name}: unknown matplotlib colour map {cmap!r}") from None
-    if not callable(cmap):
-        raise InputError(f"{name}: expected a colour map name or Colormap, got {cmap!r}")
-    return cmap
-
-
 def _representative(v: np.ndarray, interval, levels, base: float) -> np.ndarray:
     """Each value replaced by the middle of its band (the value itself when continuous)."""
     if interval is not None:
@@ -65,9 +51,7 @@ def _representative(v: np.ndarray, interval, levels, base: float) -> np.ndarray:
             return ((np.floor((v - base) / q) + 0.5) * q + base).astype(np.float32)
     if levels is None:
         return v
-    lv = np.unique(np.asarray(levels, dtype=np.float64).ravel())
-    if lv.size == 0 or not np.all(np.isfinite(lv)):
-        raise InputError(f"levels: expected finite level values, got {np.asarray(levels)!r}")
+    lv = _levels(levels)
     # Band k lies between edges[k] and edges[k + 1]; the outer bands are as wide as their
     # neighbours (or 1 when there is a single level).
     gap_lo = lv[1] - lv[0] if lv.size > 1 else 1.0
@@ -138,11 +122,9 @@ def color_bands(
     valid = np.isfinite(v) if m is None else np.isfinite(v) & m
     if interval is not None and levels is not None:
         raise InputError("color_bands: give interval= or levels=, not both")
-    base = float(base)
-    if not np.isfinite(base):
-        raise InputError(f"base: expected a finite number, got {base!r}")
-    land = _cmap(cmap, HYPSOMETRIC, "cmap")
-    sea = _cmap(sea_cmap, BATHYMETRIC, "sea_cmap")
+    base = _finite(base, "base")
+    land = HYPSOMETRIC if cmap is None else _colormap_of(cmap, "cmap")
+    sea = BATHYMETRIC if sea_cmap is None else _colormap_of(sea_cmap, "sea_cmap")
     out = np.zeros((*v.shape, 4), dtype=np.float32)
     if not valid.any():
         return out

@@ -15,7 +15,7 @@ import numpy as np
 from skimage import measure
 
 from ..errors import InputError
-from .operators import _image, _mask, _positive
+from .operators import _finite, _image, _levels, _mask, _positive
 
 __all__ = ["ContourPolyline", "contour_polylines", "polylines_to_geojson"]
 
@@ -96,17 +96,13 @@ def contour_polylines(
         transform = tuple(float(v) for v in transform)
         if len(transform) != 6 or not all(np.isfinite(transform)):
             raise InputError(f"transform: expected 6 finite numbers, got {transform!r}")
-    base = float(base)
-    if not np.isfinite(base):
-        raise InputError(f"base: expected a finite number, got {base!r}")
+    base = _finite(base, "base")
     if not valid.any():
         return []
     if interval is not None:
         lv = _regular_levels(s[valid], _positive(interval, "interval"), base)
     else:
-        lv = np.unique(np.asarray(levels, dtype=np.float64).ravel())
-        if lv.size == 0 or not np.all(np.isfinite(lv)):
-            raise InputError(f"levels: expected finite values, got {np.asarray(levels)!r}")
+        lv = _levels(levels)
     major = None if major_interval is None else _positive(major_interval, "major_interval")
     # find_contours must not see NaN: fill it (the mask keeps the fill out of every line).
     filled = np.where(valid, s, np.float32(s[valid].min()))

@@ -30,11 +30,10 @@ import numpy as np
 from ..errors import InputError
 from . import _contour_ink as _p
 from . import _stencil
-from .operators import _image, _mask, _positive
+from .operators import _finite, _image, _levels, _mask, _positive
 
 __all__ = ["contour_lines", "hatching"]
 
-PROFILES = ("bilevel", "linear", "smooth")
 # f1 per profile: the width W of its ramp (px) and P(v) = v (p1 + v (p2 + v p3)) along it: a
 # step; a linear ramp one pixel wide, the exact area coverage of a pixel by a straight line;
 # and a smoothstep over 1.5 px.
@@ -43,6 +42,7 @@ _PROFILES = {
     "linear": (1.0, (1.0, 0.0, 0.0)),
     "smooth": (1.5, (0.0, 3.0, -2.0)),
 }
+PROFILES = tuple(_PROFILES)
 # Default g_eps: lines more than this many pixels apart count as lying in a flat region.
 FLAT_SPACING = 1000.0
 
@@ -53,13 +53,6 @@ def _unit(value, name: str, *, allow_none: bool = False) -> float | None:
     v = float(value)
     if not (np.isfinite(v) and 0.0 <= v <= 1.0):
         raise InputError(f"{name}: expected an ink value in [0, 1], got {value!r}")
-    return v
-
-
-def _finite(value, name: str) -> float:
-    v = float(value)
-    if not np.isfinite(v):
-        raise InputError(f"{name}: expected a finite number, got {value!r}")
     return v
 
 
@@ -99,15 +92,6 @@ def _prepare(field, mask, gradient) -> tuple[np.ndarray, np.ndarray | None, np.n
 
 def _run(code: str, s, m, g, prm: np.ndarray) -> np.ndarray:
     return _stencil.run(code, s, m, k=0.0 if g is None else 1.0, aux=g, prm=prm.astype(np.float32))
-
-
-def _levels(levels) -> np.ndarray:
-    lv = np.asarray(levels, dtype=np.float64).ravel()
-    if lv.size == 0:
-        raise InputError("levels: expected at least one level value")
-    if not np.all(np.isfinite(lv)):
-        raise InputError(f"levels: expected finite values, got {lv.tolist()}")
-    return np.unique(lv.astype(np.float32)).astype(np.float64)
 
 
 def contour_lines(
@@ -219,7 +203,8 @@ def contour_lines(
     else:
         if major_interval is not None or major_width is not None:
             raise InputError("major_interval/major_width: need interval=, not levels=")
-        lv = _levels(levels)
+        # the kernel compares in float32: levels that round together are one level
+        lv = np.unique(_levels(levels).astype(np.float32)).astype(np.float64)
         gap = float(np.min(np.diff(lv))) if lv.size > 1 else 0.0
         prm = np.concatenate([prm, lv])
         code = "levels"

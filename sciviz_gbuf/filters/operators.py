@@ -61,6 +61,23 @@ def _mask(mask, shape: tuple[int, ...]) -> np.ndarray | None:
     return np.ascontiguousarray(m)
 
 
+def _finite(value, name: str) -> float:
+    v = float(value)
+    if not np.isfinite(v):
+        raise InputError(f"{name}: expected a finite number, got {value!r}")
+    return v
+
+
+def _levels(levels, name: str = "levels") -> np.ndarray:
+    """Sorted, distinct, finite level values as float64 (at least one)."""
+    lv = np.asarray(levels, dtype=np.float64).ravel()
+    if lv.size == 0:
+        raise InputError(f"{name}: expected at least one level value")
+    if not np.all(np.isfinite(lv)):
+        raise InputError(f"{name}: expected finite values, got {lv.tolist()}")
+    return np.unique(lv)
+
+
 def _positive(value, name: str) -> float:
     v = float(value)
     if not (np.isfinite(v) and v > 0):
