@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import html
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
@@ -23,7 +23,6 @@ import numpy as np
 from .capture import _check_window_size, capture
 from .compose import colorize, ids_to_rgb, montage, normals_to_rgb, write_png
 from .datasets import load_jacksboro_terrain, load_nut
-from .errors import InputError
 from .filters import lambert
 from .gbuffer import GBuffer
 from .recipes import CAPTIONS as EDGE_CAPTIONS
@@ -34,8 +33,8 @@ from .recipes import (
     fig6_panels,
     fig7_panels,
     fig11_panels,
-    framed_camera,
     nut_camera,
+    terrain_birdseye_camera,
     write_panels,
 )
 
@@ -84,48 +83,6 @@ class _Scene:
             else f"sun at azimuth {self.sun[0]:g}°, altitude {self.sun[1]:g}° (GDAL convention)"
         )
         return f"sh: Lambert shade from the normals alone (Saito 1990 Fig. 9), {light}"
-
-
-def terrain_birdseye_camera(
-    bounds: Sequence[float],
-    *,
-    azimuth: float = 135.0,
-    elevation: float = 35.0,
-    view_angle: float = 30.0,
-    aspect: float = 4 / 3,
-    margin: float = 0.05,
-) -> tuple[tuple[float, ...], tuple[float, ...], tuple[float, float, float]]:
-    """A perspective camera looking down at the centre of ``bounds`` from a compass direction.
-
-    Parameters
-    ----------
-    bounds : (xmin, xmax, ymin, ymax, zmin, zmax)
-        Of the surface, with +x east, +y north and +z up (as ``pyvista.DataSet.bounds``).
-    azimuth : float, default: 135.0
-        Compass direction of the eye seen from the centre, in degrees clockwise from north
-        (GDAL's convention); 135 is south-east.
-    elevation : float, default: 35.0
-        Angle of the line of sight above the horizontal, in degrees (0 < elevation < 90).
-    view_angle : float, default: 30.0
-        The camera's vertical view angle (VTK's default), which the distance is fitted to.
-    aspect : float, default: 4/3
-        Width / height of the image.
-    margin : float, default: 0.05
-        Empty border, as a fraction of the image's half width and half height.
-
-    Returns
-    -------
-    position, focal_point, view_up : tuple of float
-        As accepted by :func:`sciviz_gbuf.capture`'s ``camera``. The eye is as close as it can
-        be with all eight corners of ``bounds`` in view.
-    """
-    if not 0.0 < elevation < 90.0:
-        raise InputError(f"elevation: expected degrees in (0, 90), got {elevation!r}")
-    az, el = np.radians(azimuth), np.radians(elevation)
-    to_eye = (np.sin(az) * np.cos(el), np.cos(az) * np.cos(el), np.sin(el))
-    return framed_camera(
-        bounds, to_eye, (0.0, 0.0, 1.0), view_angle=view_angle, aspect=aspect, margin=margin
-    )
 
 
 def _scenes(aspect: float) -> list[_Scene]:

@@ -17,7 +17,7 @@ import pyvista as pv
 from vtkmodules.vtkCommonCore import vtkSMPTools
 from vtkmodules.vtkCommonDataModel import vtkDataObject, vtkDataSet, vtkMultiBlockDataSet
 from vtkmodules.vtkFiltersCore import vtkPolyDataNormals, vtkTriangleFilter
-from vtkmodules.vtkFiltersGeometry import vtkDataSetSurfaceFilter
+from vtkmodules.vtkFiltersGeometry import vtkDataSetSurfaceFilter, vtkGeometryFilter
 
 from .errors import InputError
 
@@ -137,7 +137,10 @@ def _surface_polydata(name: str, data: object) -> pv.PolyData:
     else:
         src = ds.copy(deep=False)
         src.cell_data[_CELL_ID] = np.arange(ds.n_cells, dtype=np.int64)
-        surf = vtkDataSetSurfaceFilter()
+        # Blanked (hidden) points or cells, e.g. a DEM's nodata, are dropped only by
+        # vtkGeometryFilter; vtkDataSetSurfaceFilter would keep them.
+        blanked = "vtkGhostType" in ds.point_data or "vtkGhostType" in ds.cell_data
+        surf = vtkGeometryFilter() if blanked else vtkDataSetSurfaceFilter()
         surf.SetInputData(src)
         surf.Update()
         poly = pv.wrap(surf.GetOutput())

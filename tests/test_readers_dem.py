@@ -1,4 +1,4 @@
-"""read_dem: ESRI ASCII, SRTM .hgt, .npy/.npz, GeoTIFF and arrays -> north-up DEM in metres."""
+"""read_dem: ESRI ASCII, SRTM .hgt, .npy/.npz, GeoTIFF, USGS .dem, arrays, DataArrays; surfaces."""
 
 from __future__ import annotations
 
@@ -324,3 +324,299 @@ def test_geotiff_without_rasterio(tmp_path, monkeypatch):
     monkeypatch.setitem(sys.modules, "rasterio", None)
     with pytest.raises(InputError, match=r"dem\.tif: reading GeoTIFF needs rasterio.*\[geo\]"):
         read_dem(path)
+
+
+# --- USGS ASCII DEM (.dem) ------------------------------------------------------------------
+
+
+def _d24(v: float) -> str:
+    """A Fortran D24.15 field, as USGS writes them (D exponents, which VTK turns into E)."""
+    return f"{v:24.15E}".replace("E", "D")
+
+
+def write_usgs_dem(
+    path,
+    elev: np.ndarray,
+    starts,
+    counts,
+    *,
+    x0: float = 500000.0,
+    y0: float = 4000000.0,
+    res=(30.0, 30.0, 0.5),
+    plane_unit: int = 2,
+    elevation_unit: int = 2,
+) -> None:
+    """A USGS ASCII DEM written by hand from the format's fixed columns (no package code).
+
+    ``elev`` holds integers in units of ``res[2]``, row 0 **south**, column 0 west (the file's own
+    profile order); profile ``c`` holds rows ``starts[c]`` .. ``starts[c] + counts[c] - 1``. The
+    type A record is 1024 bytes: label (144), DEM level, pattern, ground system, zone (4 x I6),
+    15 projection parameters (D24.15), ground unit, elevation unit, polygon sides (3 x I6), the
+    SW, NW, NE, SE corners (8 x D24.15), min/max elevation (2 x D24.15), rotation (D24.15),
+    accuracy (I6), x/y/z resolution (3 x E12.6), rows and columns of profiles (2 x I6).
+    Each type B record: row, column, number of elevations, 1 (4 x I6), x and y of the first
+    sample, datum elevation, min and max (5 x D24.15), then the elevations (I6), padded to 1024.
+    """
+    nrows, ncols = elev.shape
+    dx, dy, dz = res
+    xe, yn = x0 + (ncols - 1) * dx, y0 + (nrows - 1) * dy
+    inside = np.concatenate(
+        [elev[s : s + n, c] for c, (s, n) in enumerate(zip(starts, counts, strict=True))]
+    )
+    a = f"{'SYNTHETIC TEST DEM':<144}{1:6d}{1:6d}{1:6d}{13:6d}" + _d24(0.0) * 15
+    a += f"{plane_unit:6d}{elevation_unit:6d}{4:6d}"
+    a += "".join(_d24(v) for v in (x0, y0, x0, yn, xe, yn, xe, y0))
+    a += _d24(inside.min() * dz) + _d24(inside.max() * dz) + _d24(0.0) + f"{0:6d}"
+    a += "".join(f"{v:12.6E}" for v in (dx, dy, dz)) + f"{1:6d}{ncols:6d}"
+    assert len(a) == 864
+    records = [f"{a:<1024}"]
+    for c, (s, n) in enumerate(zip(starts, counts, strict=True)):
+        col = elev[s : s + n, c]
+        b = f"{s + 1:6d}{c + 1:6d}{n:6d}{1:6d}"
+        b += "".join(
+            _d24(v) for v in (x0 + c * dx, y0 + s * dy, 0.0, col.min() * dz, col.max() * dz)
+        )
+        b += "".join(f"{int(v):6d}" for v in col)
+        records.append(b + " " * (-len(b) % 1024))
+    path.write_text("".join(records))
+
+
+def ramp_dem(nrows: int, ncols: int):
+    """Elevations rising 3 units per column east and 7 per row north; ragged profile ends."""
+    r, c = np.mgrid[0:nrows, 0:ncols]
+    elev = 200 + 3 * c + 7 * r  # row 0 south
+    starts = [k % 3 for k in range(ncols)]
+    counts = [nrows - s - (k % 2) for k, s in enumerate(starts)]
+    inside = np.zeros((nrows, ncols), bool)
+    for k, (s, n) in enumerate(zip(starts, counts, strict=True)):
+        inside[s : s + n, k] = True
+    return elev, starts, counts, inside
+
+
+@pytest.mark.parametrize("ncols", [120, 7])  # >= 100: vtkDEMReader; fewer: the scanned values
+def test_usgs_dem_ramps_orientation_fill_and_georeference(tmp_path, ncols):
+    elev, starts, counts, inside = ramp_dem(6, ncols)
+    path = tmp_path / "ramp.dem"
+    write_usgs_dem(path, elev, starts, counts)
+    dem = read_dem(path)
+    assert dem.shape == (6, ncols) and dem.heights.dtype == np.float32
+    # north up: file row r (south first) is DEM row 5 - r; heights in metres (0.5 m units)
+    np.testing.assert_array_equal(dem.mask, inside[::-1])
+    np.testing.assert_array_equal(dem.heights[dem.mask], (0.5 * elev[::-1])[inside[::-1]])
+    assert np.isnan(dem.heights[~dem.mask]).all() and (~dem.mask).sum() > 0
+    # the lowest sample (header minimum, 100 m, where VTK also fills) stays a valid height
+    assert dem.heights[5, 0] == 100.0 and dem.mask[5, 0]
+    assert np.nanmean(np.diff(dem.heights, axis=1)) == pytest.approx(1.5)  # east: +3 x 0.5 m
+    assert np.nanmean(np.diff(dem.heights, axis=0)) == pytest.approx(-3.5)  # down = south
+    # corner transform: south-west sample at (500000, 4000000), 30 m cells
+    assert dem.transform == (499985.0, 30.0, 0.0, 4000000 + 5.5 * 30, 0.0, -30.0)
+    assert dem.pixel_size == (30.0, 30.0) and not dem.geographic and dem.crs is None
+    assert dem.source == str(path)
+
+
+def test_usgs_dem_vtk_fills_with_minimum_elevation(tmp_path):
+    """The VTK quirk the mask works around: outside the profiles it writes the header minimum."""
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+    from vtkmodules.vtkIOImage import vtkDEMReader
+
+    elev, starts, counts, inside = ramp_dem(6, 120)
+    path = tmp_path / "ramp.dem"
+    write_usgs_dem(path, elev, starts, counts)
+    reader = vtkDEMReader()
+    reader.SetFileName(str(path))
+    reader.Update()
+    image = reader.GetOutput()
+    assert image.GetDimensions() == (120, 6, 1) and image.GetOrigin()[:2] == (500000, 4000000)
+    values = vtk_to_numpy(image.GetPointData().GetScalars()).reshape(6, 120)  # row 0 south
+    assert (values[~inside] == 100.0).all() and values[0, 0] == 100.0
+    np.testing.assert_array_equal(values[inside], 0.5 * elev[inside])
+
+
+def test_usgs_dem_feet_and_arc_seconds(tmp_path):
+    elev, starts, counts, inside = ramp_dem(4, 5)
+    feet = tmp_path / "feet.dem"
+    write_usgs_dem(feet, elev, starts, counts, res=(10.0, 10.0, 1.0), elevation_unit=1)
+    dem = read_dem(feet)
+    np.testing.assert_allclose(dem.heights[dem.mask], (0.3048 * elev[::-1])[inside[::-1]], 1e-6)
+    wide = tmp_path / "feet_wide.dem"  # the VTK path multiplies by 0.305: rescaled
+    elev_w, starts_w, counts_w, inside_w = ramp_dem(4, 100)
+    write_usgs_dem(wide, elev_w, starts_w, counts_w, res=(10.0, 10.0, 1.0), elevation_unit=1)
+    wide_dem = read_dem(wide)
+    np.testing.assert_allclose(
+        wide_dem.heights[wide_dem.mask], (0.3048 * elev_w[::-1])[inside_w[::-1]], rtol=1e-6
+    )
+    arc = tmp_path / "arc.dem"  # 3" cells, south-west sample at 105.5 W, 40.1 N
+    write_usgs_dem(
+        arc, elev, starts, counts, x0=-105.5 * 3600, y0=40.1 * 3600, res=(3.0, 3.0, 1.0),
+        plane_unit=3,
+    )  # fmt: skip
+    geo = read_dem(arc)
+    d = 3 / 3600
+    assert geo.geographic
+    assert geo.transform == pytest.approx((-105.5 - d / 2, d, 0, 40.1 + 3.5 * d, 0, -d))
+    m_lon, m_lat = metres_per_degree(40.1 + 1.5 * d)
+    assert geo.pixel_size == pytest.approx((d * m_lon, d * m_lat))
+    plane_feet = tmp_path / "plane_feet.dem"
+    write_usgs_dem(plane_feet, elev, starts, counts, res=(10.0, 10.0, 1.0), plane_unit=1)
+    state = read_dem(plane_feet)
+    assert state.transform[1] == 10.0 and state.pixel_size == pytest.approx((3.048, 3.048))
+
+
+@pytest.mark.parametrize("ncols", [120, 7])
+def test_usgs_dem_truncated_and_garbage(tmp_path, ncols):
+    elev, starts, counts, _ = ramp_dem(6, ncols)
+    good = tmp_path / "good.dem"
+    write_usgs_dem(good, elev, starts, counts)
+    text = good.read_text()
+    cut = tmp_path / "cut.dem"
+    cut.write_text(text[: 1024 * (ncols // 2 + 1) + 150])  # inside profile ncols // 2 + 1
+    with pytest.raises(InputError, match=rf"cut\.dem: USGS DEM profile {ncols // 2 + 1} \(col.*"):
+        read_dem(cut)
+    cut.write_text(text[: 1024 * (ncols // 2 + 1)])  # whole profiles missing: VTK says nothing
+    with pytest.raises(InputError, match=rf"cut\.dem: .*{ncols} profiles.*ends after {ncols // 2}"):
+        read_dem(cut)
+    short = tmp_path / "short.dem"
+    short.write_text(text[:500])
+    with pytest.raises(InputError, match=r"short\.dem: 500 bytes is too short"):
+        read_dem(short)
+    garbage = tmp_path / "garbage.dem"
+    garbage.write_text("hello world " * 200)
+    with pytest.raises(InputError, match=r"garbage\.dem: not a USGS ASCII DEM"):
+        read_dem(garbage)
+    # a profile reaching past the corners' grid (VTK would write out of bounds)
+    tall = tmp_path / "tall.dem"
+    write_usgs_dem(tall, elev, starts, counts)
+    tall.write_text(
+        tall.read_text().replace(f"{1:6d}{1:6d}{6:6d}{1:6d}", f"{2:6d}{1:6d}{6:6d}{1:6d}", 1)
+    )
+    with pytest.raises(InputError, match=r"tall\.dem: USGS DEM profile at column 1.*outside"):
+        read_dem(tall)
+
+
+def test_usgs_dem_vtk_errors_become_input_error(tmp_path, capfd):
+    from sciviz_gbuf.readers._dem_files import _vtk_dem_values
+
+    with pytest.raises(InputError, match=r"gone\.dem: vtkDEMReader could not read.*not found"):
+        _vtk_dem_values(tmp_path / "gone.dem", 2, 100)
+    assert "ERROR" not in capfd.readouterr().err  # taken off VTK's output window
+
+
+# --- xarray DataArray -----------------------------------------------------------------------
+
+
+def test_dataarray_projected_round_trip_either_y_order():
+    xr = pytest.importorskip("xarray")
+    values = np.array([[1.0, 2.0, 3.0, 4.0], [5.0, -9999.0, 7.0, 8.0], [9.0, 10.0, 11.0, 12.0]])
+    x = 100 + 10 * np.arange(4) + 5.0  # pixel centres
+    y = 500 - 20 * np.arange(3) - 10.0  # north first
+    da = xr.DataArray(values, dims=("y", "x"), coords={"x": x, "y": y}, name="z")
+    da.attrs.update(crs="EPSG:32613", _FillValue=-9999.0)
+    for variant in (da, da.isel(y=slice(None, None, -1)), da.transpose("x", "y")):
+        dem = read_dem(variant)
+        assert dem.transform == (100.0, 10.0, 0.0, 500.0, 0.0, -20.0)
+        assert dem.pixel_size == (10.0, 20.0) and not dem.geographic and dem.crs == "EPSG:32613"
+        np.testing.assert_array_equal(dem.mask, values != -9999)
+        np.testing.assert_array_equal(dem.heights[dem.mask], values[values != -9999])
+        assert dem.heights[2, 0] == 9.0  # south-west stays south-west
+    east_to_west = da.isel(x=slice(None, None, -1))
+    assert read_dem(east_to_west).heights[0, 0] == 1.0
+    wkt = 'PROJCS["UTM 13N",GEOGCS["WGS 84"]]'
+    bare = xr.DataArray(values, dims=("y", "x"), coords={"x": x, "y": y})
+    bare = bare.assign_coords(spatial_ref=xr.DataArray(0, attrs={"crs_wkt": wkt}))
+    assert read_dem(bare, nodata=-9999).crs == wkt
+    with pytest.raises(InputError, match="transform=/crs="):
+        read_dem(da, crs="EPSG:4326")
+
+
+def test_dataarray_lonlat_is_geographic():
+    xr = pytest.importorskip("xarray")
+    lat = 45.0 + 0.01 * np.arange(5)  # south first: flipped to north up
+    lon = 7.0 + 0.02 * np.arange(3)
+    values = np.arange(15, dtype=np.float32).reshape(5, 3)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # lon/lat dims answer the question: no guessing warning
+        dem = read_dem(xr.DataArray(values, dims=("lat", "lon"), coords={"lat": lat, "lon": lon}))
+    assert dem.geographic and dem.heights[0, 0] == 12 and dem.heights[4, 2] == 2
+    assert dem.transform == pytest.approx((6.99, 0.02, 0, 45.045, 0, -0.01))
+    m_lon, m_lat = metres_per_degree(45.02)
+    assert dem.pixel_size == pytest.approx((0.02 * m_lon, 0.01 * m_lat))
+    long = xr.DataArray(
+        values, dims=("latitude", "longitude"), coords={"latitude": lat, "longitude": lon}
+    )
+    assert read_dem(long).pixel_size == dem.pixel_size
+
+
+def test_dataarray_errors():
+    xr = pytest.importorskip("xarray")
+    values = np.zeros((3, 4))
+    uneven = xr.DataArray(values, dims=("y", "x"), coords={"x": [0.0, 1, 2, 4], "y": [2.0, 1, 0]})
+    with pytest.raises(InputError, match=r"coordinate 'x' is not evenly spaced"):
+        read_dem(uneven)
+    with pytest.raises(InputError, match="no coordinate values"):
+        read_dem(xr.DataArray(values, dims=("y", "x")))
+    with pytest.raises(InputError, match="expected one of x/lon"):
+        read_dem(xr.DataArray(values, dims=("row", "col")))
+    with pytest.raises(InputError, match="2-D DataArray"):
+        read_dem(xr.DataArray(np.zeros((2, 3, 4)), dims=("t", "y", "x")))
+
+
+# --- DEM.to_pyvista -------------------------------------------------------------------------
+
+
+def test_to_pyvista_projected_points_at_pixel_centres():
+    values = np.array([[1.0, 2.0, np.nan], [4.0, 5.0, 6.0]])
+    dem = read_dem(values, transform=(1000.0, 10.0, 0.0, 2000.0, 0.0, -20.0), crs="EPSG:32613")
+    grid = dem.to_pyvista(z_factor=2.0)
+    assert grid.dimensions == (3, 2, 1)
+    pts = grid.points.reshape(2, 3, 3)[::-1]  # i east fastest, j north: flip to north-up rows
+    cc, rr = np.meshgrid(np.arange(3), np.arange(2))
+    np.testing.assert_allclose(pts[..., 0], 1000 + (cc + 0.5) * 10)
+    np.testing.assert_allclose(pts[..., 1], 2000 - (rr + 0.5) * 20)
+    np.testing.assert_allclose(pts[..., 2], [[2, 4, 2], [8, 10, 12]])  # nodata z: min valid x 2
+    elevation = grid.point_data["elevation"].reshape(2, 3)[::-1]
+    assert elevation.dtype == np.float32
+    np.testing.assert_array_equal(elevation, values.astype(np.float32))
+    assert np.isfinite(grid.points).all()
+    ghost = grid.point_data["vtkGhostType"].reshape(2, 3)[::-1]
+    np.testing.assert_array_equal(ghost != 0, np.isnan(values))
+    # only the western quad has 4 valid corners; vtkGeometryFilter honours the blanking
+    assert grid.extract_surface(algorithm=None).n_cells == 1
+
+
+def test_to_pyvista_hugo_site_hides_nodata_cells(shared_data):
+    dem = read_dem(shared_data / "dem" / "hugo_site.asc")
+    grid = dem.to_pyvista()
+    assert np.isfinite(grid.points).all() and grid.n_points == 55 * 76
+    m = dem.mask
+    full_quads = int((m[:-1, :-1] & m[1:, :-1] & m[:-1, 1:] & m[1:, 1:]).sum())
+    assert 0 < full_quads < grid.n_cells
+    surface = grid.extract_surface(algorithm=None)  # vtkGeometryFilter
+    assert surface.n_cells == full_quads
+    # VTK quirk: vtkDataSetSurfaceFilter (PyVista 0.49's default algorithm) ignores blanking
+    assert grid.extract_surface(algorithm="dataset_surface").n_cells == grid.n_cells
+    valid_z = surface.points[:, 2]
+    assert valid_z.min() >= np.nanmin(dem.heights) and valid_z.max() == np.nanmax(dem.heights)
+    # quads face up (+z) so lighting is right: i runs east, j north
+    normals = surface.compute_normals(cell_normals=True, point_normals=False)
+    assert (normals.cell_data["Normals"][:, 2] > 0).all()
+
+
+def test_to_pyvista_geographic_metres_and_step(shared_data):
+    dem = read_dem(shared_data / "dem" / SRTM_ASC, geographic=True)
+    h, w = dem.shape
+    grid = dem.to_pyvista()
+    xmin, xmax, ymin, ymax, zmin, zmax = grid.bounds
+    # pixel centres: (w - 1) pixels between the outer ones, centred on the grid centre
+    assert xmax - xmin == pytest.approx((w - 1) * dem.pixel_size[0], rel=1e-9)
+    assert ymax - ymin == pytest.approx((h - 1) * dem.pixel_size[1], rel=1e-9)
+    assert (xmin + xmax, ymin + ymax) == pytest.approx((0, 0), abs=1e-6)
+    assert (zmin, zmax) == (np.nanmin(dem.heights), np.nanmax(dem.heights))
+    coarse = dem.to_pyvista(step=7)
+    assert coarse.dimensions == (math.ceil(w / 7), math.ceil(h / 7), 1)
+    elevation = coarse.point_data["elevation"].reshape(math.ceil(h / 7), math.ceil(w / 7))[::-1]
+    np.testing.assert_array_equal(elevation, dem.heights[::7, ::7])
+    xs = coarse.points.reshape(math.ceil(h / 7), math.ceil(w / 7), 3)[0, :, 0]
+    np.testing.assert_allclose(np.diff(xs), 7 * dem.pixel_size[0], rtol=1e-9)
+    for bad in (0, 1.5, True):
+        with pytest.raises(InputError, match="step must be an integer"):
+            dem.to_pyvista(step=bad)

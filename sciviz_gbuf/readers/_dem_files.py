@@ -16,7 +16,7 @@ import numpy as np
 
 from ..errors import InputError
 
-__all__ = ["RawDEM", "read_asc", "read_geotiff", "read_hgt", "read_npz"]
+__all__ = ["RawDEM", "read_asc", "read_geotiff", "read_hgt", "read_npz", "read_usgs_dem"]
 
 GeoTransform = tuple[float, float, float, float, float, float]
 
@@ -34,6 +34,8 @@ class RawDEM:
     transform: GeoTransform | None = None
     crs: str | None = None
     geographic: bool | None = None
+    #: Metres per CRS unit of a projected grid (0.3048 for a grid in feet).
+    unit_metres: float = 1.0
 
 
 def _blank_nodata(values: np.ndarray, nodata: float | None) -> np.ndarray:
@@ -192,3 +194,174 @@ def read_geotiff(path: Path) -> RawDEM:
         )
     heights = _blank_nodata(values, nodata)
     return RawDEM(heights, tuple(map(float, transform)) if transform else None, crs, geographic)
+
+
+# --- USGS ASCII DEM ---------------------------------------------------------------------------
+
+#: vtkDEMReader's own feet-to-metres factor (VTK_METERS_PER_FEET); the international foot is
+#: 0.3048 m, so its heights in feet are rescaled by 0.3048 / 0.305.
+VTK_METRES_PER_FOOT = 0.305
+METRES_PER_FOOT = 0.3048
+#: Type A record fields (byte offset, width) as vtkDEMReader's sscanf calls read them.
+_A_FIELDS = {
+    "units": (528, 18),  # ground (plane) unit, elevation unit, polygon sides, 3 x 6
+    "corners": (546, 192),  # SW, NW, NE, SE (x, y), 8 x 24
+    "resolution": (816, 36),  # x, y, z, 3 x 12
+    "profiles": (852, 12),  # rows, columns, 2 x 6
+}
+#: One ``%6d`` of C's fscanf: skip white space, then at most 6 characters of sign and digits.
+_INT6 = re.compile(rb"[ \t\r\n\v\f]*([+-]\d{1,5}|\d{1,6})")
+
+
+def _a_numbers(record: bytes, key: str, width: int, path: Path) -> list[float]:
+    start, size = _A_FIELDS[key]
+    text = record[start : start + size].decode("latin-1").upper().replace("D", "E")
+    try:
+        return [float(text[i : i + width]) for i in range(0, size, width)]
+    except ValueError as exc:
+        raise InputError(
+            f"{path}: not a USGS ASCII DEM: type A record field {key} at bytes "
+            f"{start}-{start + size} is {text!r}"
+        ) from exc
+
+
+def _profile_extents(data: bytes, n_profiles: int, path: Path) -> list[tuple[int, int, list[int]]]:
+    """``(row0, column, elevations)`` of each type B record, scanned as vtkDEMReader reads it.
+
+    vtkDEMReader writes each profile's samples at ``row0 + k`` without checking them against its
+    grid (a bad row id writes out of bounds), and it reports a truncated file only on its output
+    window. So the records are walked here first, with its own fscanf rules: four ``%6d``, 120
+    raw characters, then ``count`` more ``%6d``.
+    """
+    pos, out = 1024, []
+    for p in range(n_profiles):
+        head = []
+        for _ in range(4):
+            m = _INT6.match(data, pos)
+            if m is None:
+                break
+            head.append(int(m[1]))
+            pos = m.end()
+        if not head and not data[pos:].strip():
+            # vtkDEMReader stops quietly here and leaves the missing columns filled.
+            raise InputError(
+                f"{path}: USGS DEM header says {n_profiles} profiles, the file ends after {p} "
+                "(truncated?)"
+            )
+        if len(head) < 4 or len(data) < pos + 120:
+            raise InputError(
+                f"{path}: USGS DEM profile {p + 1} of {n_profiles}: truncated or garbled type B "
+                f"record header at byte {pos}"
+            )
+        pos += 120  # x, y of the first sample, datum elevation, min, max (not needed here)
+        row_id, column_id, count, _ = head
+        elevations = []
+        for k in range(count):
+            m = _INT6.match(data, pos)
+            if m is None:
+                raise InputError(
+                    f"{path}: USGS DEM profile {p + 1} (column {column_id}): expected {count} "
+                    f"elevations, elevation {k + 1} at byte {pos} is missing or not an integer"
+                )
+            elevations.append(int(m[1]))
+            pos = m.end()
+        out.append((row_id - 1, column_id - 1, elevations))
+    return out
+
+
+def read_usgs_dem(path: Path) -> RawDEM:
+    """USGS ASCII DEM (``.dem``) through VTK's ``vtkDEMReader``, heights in metres.
+
+    The Type A record is checked here and every Type B record header is scanned (see
+    :func:`_profile_extents`) before VTK reads the file: the reader fills the cells outside the
+    profiles with the header's minimum elevation, a real height, so the nodata mask comes from
+    the profile extents instead. VTK's image has its row 0 in the south (profiles run south to
+    north) and its origin at the south-west sample; ground coordinates in arc-seconds or radians
+    become degrees (a geographic grid), feet stay feet with :attr:`RawDEM.unit_metres` 0.3048.
+    VTK converts feet of elevation with 0.305 m; that is rescaled to the international foot.
+    Grids narrower than 100 columns take the scanned values instead: vtkDEMReader would divide
+    by zero there (SIGFPE, killing the interpreter).
+    """
+    data = path.read_bytes()
+    if len(data) < 1024:
+        raise InputError(
+            f"{path}: {len(data)} bytes is too short for a USGS ASCII DEM (type A record: 1024)"
+        )
+    record = data[:1024]
+    plane_unit, elevation_unit, _ = _a_numbers(record, "units", 6, path)
+    corners = np.reshape(_a_numbers(record, "corners", 24, path), (4, 2))
+    res_x, res_y, res_z = _a_numbers(record, "resolution", 12, path)
+    _, n_profiles = (int(v) for v in _a_numbers(record, "profiles", 6, path))
+    if not (res_x > 0 and res_y > 0 and res_z > 0 and n_profiles > 0):
+        raise InputError(
+            f"{path}: not a USGS ASCII DEM: spatial resolution {res_x:g}, {res_y:g}, {res_z:g} "
+            f"and {n_profiles} profiles must be positive"
+        )
+    if plane_unit not in (0, 1, 2, 3) or elevation_unit not in (1, 2):
+        raise InputError(
+            f"{path}: USGS DEM ground unit code {plane_unit:g} (expected 0-3) or elevation unit "
+            f"code {elevation_unit:g} (expected 1 feet, 2 metres) not understood"
+        )
+    # vtkDEMReader's grid: the corners' bounding box in steps of the resolution (float32 sums).
+    west, east = corners[:2, 0].min(), corners[2:, 0].max()
+    south, north = corners[[0, 3], 1].min(), corners[1:3, 1].max()
+    ncols = int(np.float32(east - west) / np.float32(res_x) + 1.0)
+    nrows = int(np.float32(north - south) / np.float32(res_y) + 1.0)
+    extents = _profile_extents(data, n_profiles, path)
+    mask = np.zeros((nrows, ncols), dtype=bool)  # VTK order: row 0 south
+    scanned = np.zeros((nrows, ncols))
+    for row0, column, elevations in extents:
+        count = len(elevations)
+        if not (0 <= column < ncols and row0 >= 0 and row0 + count <= nrows):
+            raise InputError(
+                f"{path}: USGS DEM profile at column {column + 1}, rows {row0 + 1}-"
+                f"{row0 + count} lies outside the {nrows} x {ncols} grid of its corners"
+            )
+        mask[row0 : row0 + count, column] = True
+        scanned[row0 : row0 + count, column] = elevations
+    if ncols < 100:
+        # vtkDEMReader divides by ncols // 100 (its progress interval): SIGFPE, the whole
+        # process dies. Narrow grids use the scanned values, scaled as VTK would.
+        values = scanned * res_z * (METRES_PER_FOOT if elevation_unit == 1 else 1.0)
+    else:
+        values = _vtk_dem_values(path, nrows, ncols)
+        if elevation_unit == 1:
+            values *= METRES_PER_FOOT / VTK_METRES_PER_FOOT
+    heights = np.where(mask, values, np.nan)[::-1].astype(np.float32)  # north row first
+    x_sw, y_sw = corners[0]  # the south-west sample (VTK's image origin), in ground units
+
+    to_crs = {0: 180 / np.pi, 3: 1 / 3600}.get(int(plane_unit), 1.0)  # radians, arc-s -> deg
+    dx, dy = res_x * to_crs, res_y * to_crs
+    transform = (x_sw * to_crs - dx / 2, dx, 0.0, y_sw * to_crs + (nrows - 0.5) * dy, 0.0, -dy)
+    # No CRS: the zone and datum (NAD27, NAD83, ...) are not read, and guessing one is worse.
+    unit = METRES_PER_FOOT if plane_unit == 1 else 1.0
+    return RawDEM(heights, transform, None, plane_unit in (0, 3), unit)
+
+
+def _vtk_dem_values(path: Path, nrows: int, ncols: int) -> np.ndarray:
+    """vtkDEMReader's image as float64 (nrows, ncols), row 0 south; its errors -> InputError."""
+    from vtkmodules.util.misc import calldata_type
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+    from vtkmodules.util.vtkConstants import VTK_STRING
+    from vtkmodules.vtkCommonCore import vtkCommand
+    from vtkmodules.vtkIOImage import vtkDEMReader
+
+    reader = vtkDEMReader()
+    errors: list[str] = []
+
+    # Observers take the errors off VTK's output window (stderr) and pass them on here.
+    @calldata_type(VTK_STRING)
+    def on_error(_obj, _event, message: str) -> None:
+        # "ERROR: In vtkDEMReader.cxx, line n\nvtkDEMReader (0x..): text": keep the text
+        errors.append(str(message).strip().splitlines()[-1].split("): ", 1)[-1])
+
+    reader.AddObserver(vtkCommand.ErrorEvent, on_error)
+    reader.GetExecutive().AddObserver(vtkCommand.ErrorEvent, on_error)
+    reader.SetFileName(str(path))
+    reader.Update()
+    image = reader.GetOutput()
+    scalars = image.GetPointData().GetScalars()
+    if errors or scalars is None or tuple(image.GetDimensions()[:2]) != (ncols, nrows):
+        detail = "; ".join(dict.fromkeys(errors)) or f"output dimensions {image.GetDimensions()}"
+        raise InputError(f"{path}: vtkDEMReader could not read this USGS DEM ({detail})")
+    return vtk_to_numpy(scalars).reshape(nrows, ncols).astype(np.float64)

@@ -11,6 +11,7 @@ import os
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -24,12 +25,17 @@ from ._dem_files import (
     read_geotiff,
     read_hgt,
     read_npz,
+    read_usgs_dem,
 )
+
+if TYPE_CHECKING:
+    import pyvista
 
 __all__ = ["DEM", "read_dem"]
 
 _READERS = {
     ".asc": read_asc,
+    ".dem": read_usgs_dem,
     ".hgt": read_hgt,
     ".npz": read_npz,
     ".tif": read_geotiff,
@@ -83,9 +89,64 @@ class DEM:
         xs, ys = (x0, x0 + w * dx), (y0, y0 + h * dy)
         return min(xs), max(xs), min(ys), max(ys)
 
+    def to_pyvista(self, *, z_factor: float = 1.0, step: int = 1) -> pyvista.StructuredGrid:
+        """The DEM as a PyVista surface in metres, one point per pixel centre.
+
+        Parameters
+        ----------
+        z_factor : float, optional
+            Vertical exaggeration: point z is ``height * z_factor``.
+        step : int, optional
+            Keep every ``step``-th row and column (from the first), for huge DEMs.
+
+        Returns
+        -------
+        pyvista.StructuredGrid
+            Dimensions ``(W', H', 1)``: i runs east, j north (so the quads face up). x, y are the
+            pixel centres' CRS coordinates for projected grids (in the CRS unit); for
+            geographic grids a local equirectangular plane in metres about the grid centre,
+            scaled like :attr:`pixel_size`. Point array ``"elevation"`` (float32) holds the
+            true heights, NaN at nodata. Nodata points are hidden (``vtkGhostType``
+            HIDDENPOINT, so every cell touching one is blanked) and get the lowest valid
+            height as z: VTK never sees a NaN coordinate. Blanking is honoured by
+            ``extract_surface(algorithm=None)`` (vtkGeometryFilter) and by rendering, but not
+            by ``extract_surface(algorithm="dataset_surface")``, PyVista 0.49's default, which
+            keeps the hidden cells.
+
+        Raises
+        ------
+        InputError
+            ``step`` not a positive integer or ``z_factor`` not finite.
+        """
+        import pyvista
+
+        if isinstance(step, bool) or not isinstance(step, (int, np.integer)) or step < 1:
+            raise InputError(f"{self.source or 'DEM'}: step must be an integer >= 1, got {step!r}")
+        if not np.isfinite(z_factor):
+            raise InputError(f"{self.source or 'DEM'}: z_factor must be finite, got {z_factor!r}")
+        h, w = self.shape
+        rows, cols = np.arange(0, h, step), np.arange(0, w, step)
+        heights = self.heights[::step, ::step]
+        cc, rr = np.meshgrid(cols + 0.5, rows + 0.5)
+        x0, dx, rx, y0, ry, dy = self.transform
+        x, y = x0 + cc * dx + rr * rx, y0 + cc * ry + rr * dy
+        if self.geographic:
+            lon_c, lat_c = x0 + w / 2 * dx + h / 2 * rx, y0 + w / 2 * ry + h / 2 * dy
+            m_lon, m_lat = metres_per_degree(lat_c)
+            x, y = (x - lon_c) * m_lon, (y - lat_c) * m_lat
+        valid = np.isfinite(heights)
+        floor = float(heights[valid].min()) if valid.any() else 0.0
+        z = np.where(valid, heights, floor) * z_factor
+        # Rows flipped and transposed: i (fastest) runs east, j north, normals point up.
+        grid = pyvista.StructuredGrid(*(a[::-1].T for a in (x, y, z)))
+        grid.point_data["elevation"] = heights[::-1].ravel().astype(np.float32)
+        if not valid.all():
+            grid.hide_points(~valid[::-1].ravel())
+        return grid
+
 
 def read_dem(
-    source: str | os.PathLike | np.ndarray,
+    source: str | os.PathLike | np.ndarray | Any,
     *,
     spacing: float | tuple[float, float] | None = None,
     nodata: float | None = None,
@@ -111,7 +172,19 @@ def read_dem(
       (``pip install 'sciviz-gbuf[geo]'``). Three or more uint8 bands (an RGB image) are an
       error; a TIFF without georeference is read like an array with a :class:`UserWarning`.
 
-    A 2-D numpy array is read as heights with row 0 north.
+    - ``.dem`` USGS ASCII DEM (Type A header record + one Type B record per south-to-north
+      profile) through VTK's ``vtkDEMReader``. Cells outside the profiles (the corners of a
+      quadrangle) are nodata. Heights are in metres (feet converted with 0.3048); ground units
+      in arc-seconds or radians give a geographic grid in degrees, metres or feet a projected
+      one (no CRS: the zone and datum are not read; in feet, :attr:`DEM.pixel_size` is still
+      metres). Like VTK, a profile is placed by its row id, not by its first sample's y.
+
+    A 2-D numpy array is read as heights with row 0 north. A 2-D ``xarray.DataArray`` (xarray
+    is not needed otherwise) with dims ``x``/``y``, ``lon``/``lat`` or ``longitude``/``latitude``
+    (any order) is read with the transform of its evenly spaced pixel-centre coordinates, turned
+    north up and east right; lon/lat dims make it geographic. Its CRS comes from rioxarray's
+    ``.rio.crs``, an attribute ``crs``, or a ``spatial_ref`` coordinate (``crs_wkt``); its
+    nodata from the attributes ``_FillValue`` or ``nodata`` (or ``encoding["_FillValue"]``).
 
     Geographic grids (a geographic CRS, or explicitly ``geographic=True``) get metres per degree
     from :func:`sciviz_gbuf.datasets.metres_per_degree` (WGS84 ellipsoid series) at the latitude
@@ -125,8 +198,9 @@ def read_dem(
 
     Parameters
     ----------
-    source : str, path-like or numpy.ndarray
-        A file (only read, never modified) or a 2-D array of heights.
+    source : str, path-like, numpy.ndarray or xarray.DataArray
+        A file (only read, never modified), a 2-D array of heights or a georeferenced 2-D
+        DataArray.
     spacing : float or (float, float), optional
         Metres per pixel ``(dx, dy)`` (one number for square pixels) for sources without a
         georeference (arrays, ``.npy``, plain TIFF). **Default 1 m**, the pixel grid. An error
@@ -148,8 +222,10 @@ def read_dem(
     ------
     InputError
         Missing file, unknown extension, a file that does not hold what its format says
-        (truncated ``.hgt``, ``.asc`` rows/columns not as its header says, an RGB TIFF), an array
-        that is not 2-D and numeric, or conflicting/invalid ``spacing``/``transform``.
+        (truncated ``.hgt``, ``.asc`` rows/columns not as its header says, an RGB TIFF, a
+        truncated or garbled ``.dem``), an array that is not 2-D and numeric, a DataArray
+        without x/y (lon/lat) coordinates or with unevenly spaced ones, or
+        conflicting/invalid ``spacing``/``transform``.
     """
     name: str | None = None
     if isinstance(source, (str, os.PathLike)):
@@ -169,6 +245,13 @@ def read_dem(
             )
         if raw.transform is not None and (transform is not None or crs is not None):
             raise InputError(f"{path}: transform=/crs= are for sources without a georeference")
+    elif _is_dataarray(source):
+        name = f"DataArray {getattr(source, 'name', None)!r}"
+        raw, da_nodata = _read_dataarray(source, name)
+        if transform is not None or crs is not None:
+            raise InputError(f"{name}: transform=/crs= are for sources without a georeference")
+        if da_nodata is not None:
+            raw.heights = np.where(raw.heights == da_nodata, np.nan, raw.heights)
     else:
         raw = RawDEM(np.asarray(source))
     if raw.transform is None:
@@ -180,6 +263,84 @@ def read_dem(
             f"transform {raw.transform}"
         )
     return _finish(raw, name, spacing=spacing, nodata=nodata, geographic=geographic)
+
+
+def _is_dataarray(obj: Any) -> bool:
+    """Duck-typed xarray.DataArray check; xarray itself is never imported here."""
+    return type(obj).__module__.startswith("xarray") and hasattr(obj, "dims")
+
+
+#: Dimension names read as (x, y) axes; the lon/lat ones make the grid geographic.
+_X_DIMS = {"x": False, "lon": True, "longitude": True}
+_Y_DIMS = {"y": False, "lat": True, "latitude": True}
+
+
+def _axis(da: Any, dim: str, name: str) -> tuple[float, float]:
+    """First pixel-centre coordinate and step of an evenly spaced 1-D dimension coordinate."""
+    if dim not in da.coords:
+        raise InputError(f"{name}: dimension {dim!r} has no coordinate values")
+    v = np.asarray(da.coords[dim].values, dtype=float)
+    if v.size < 2 or not np.isfinite(v).all():
+        raise InputError(
+            f"{name}: coordinate {dim!r} needs at least 2 finite values to give a spacing, "
+            f"got {v.size}"
+        )
+    d = np.diff(v)
+    step = (v[-1] - v[0]) / (v.size - 1)
+    # Tolerance relative to the step: float32 or text round trips of coordinates are fine.
+    if step == 0 or not np.allclose(d, step, rtol=1e-5, atol=0):
+        raise InputError(
+            f"{name}: coordinate {dim!r} is not evenly spaced (steps {d.min():g} to {d.max():g})"
+        )
+    return float(v[0]), float(step)
+
+
+def _dataarray_crs(da: Any) -> str | None:
+    """CRS from rioxarray's ``.rio.crs``, else ``crs`` attrs, else a ``spatial_ref`` coordinate."""
+    try:
+        rio_crs = da.rio.crs  # AttributeError when rioxarray is not installed
+    except Exception:
+        rio_crs = None
+    if rio_crs is not None:
+        return rio_crs.to_string()
+    if da.attrs.get("crs"):
+        return str(da.attrs["crs"])
+    ref = da.coords["spatial_ref"].attrs if "spatial_ref" in da.coords else da.attrs
+    for key in ("crs_wkt", "spatial_ref"):
+        if isinstance(ref.get(key), str) and ref[key]:
+            return ref[key]
+    return None
+
+
+def _read_dataarray(da: Any, name: str) -> tuple[RawDEM, float | None]:
+    """A 2-D DataArray with x/y, lon/lat or longitude/latitude dims -> north-up RawDEM, nodata."""
+    if da.ndim != 2:
+        raise InputError(f"{name}: expected a 2-D DataArray, got dims {da.dims}")
+    dims = {str(d).lower(): d for d in da.dims}
+    x_dim = next((dims[k] for k in _X_DIMS if k in dims), None)
+    y_dim = next((dims[k] for k in _Y_DIMS if k in dims), None)
+    if x_dim is None or y_dim is None:
+        raise InputError(
+            f"{name}: dims {da.dims}: expected one of x/lon/longitude and one of y/lat/latitude"
+        )
+    da = da.transpose(y_dim, x_dim)
+    (x_first, dx), (y_first, dy) = _axis(da, x_dim, name), _axis(da, y_dim, name)
+    values = np.asarray(da.values)
+    # North up and east right: flip rows if y increases, columns if x decreases.
+    if dy > 0:
+        values, y_first, dy = values[::-1], y_first + dy * (values.shape[0] - 1), -dy
+    if dx < 0:
+        values, x_first, dx = values[:, ::-1], x_first + dx * (values.shape[1] - 1), -dx
+    transform = (x_first - dx / 2, dx, 0.0, y_first - dy / 2, 0.0, dy)  # centres -> corners
+    crs = _dataarray_crs(da)
+    lonlat = _X_DIMS[str(x_dim).lower()] or _Y_DIMS[str(y_dim).lower()]
+    geographic = True if lonlat else crs_is_geographic(crs)
+    nodata = None
+    for where, key in ((da.attrs, "_FillValue"), (da.attrs, "nodata"), (da.encoding, "_FillValue")):
+        if where.get(key) is not None:
+            nodata = float(where[key])
+            break
+    return RawDEM(values, transform, crs, geographic), nodata
 
 
 def _heights(values: np.ndarray, name: str | None, nodata: float | None) -> np.ndarray:
@@ -248,5 +409,6 @@ def _finish(raw: RawDEM, name: str | None, *, spacing, nodata, geographic) -> DE
         m_lon, m_lat = metres_per_degree(y0 + ry * w / 2 + dy * h / 2)
         pixel = (float(np.hypot(dx * m_lon, ry * m_lat)), float(np.hypot(rx * m_lon, dy * m_lat)))
     else:
-        pixel = (float(np.hypot(dx, ry)), float(np.hypot(rx, dy)))
+        unit = raw.unit_metres  # a projected grid in feet still gets metres per pixel
+        pixel = (float(np.hypot(dx, ry) * unit), float(np.hypot(rx, dy) * unit))
     return DEM(heights, np.isfinite(heights), raw.crs, transform, pixel, bool(geo), name)

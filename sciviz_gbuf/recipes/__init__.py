@@ -14,7 +14,7 @@ from .contour_figures import (
     fig11_panels,
     write_panels,
 )
-from .framing import framed_camera, oblique_camera
+from .framing import framed_camera, oblique_camera, terrain_birdseye_camera
 from .illustration import STYLES, fig7_edge_map, illustrate, shade_image, signed_to_grey
 from .saito1990 import CAPTIONS, fig3_panels, fig7_panels, nut_camera
 
@@ -34,5 +34,6 @@ __all__ = [
     "oblique_camera",
     "shade_image",
     "signed_to_grey",
+    "terrain_birdseye_camera",
     "write_panels",
 ]

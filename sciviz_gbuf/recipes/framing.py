@@ -8,7 +8,7 @@ import numpy as np
 
 from ..errors import InputError
 
-__all__ = ["framed_camera", "oblique_camera"]
+__all__ = ["framed_camera", "oblique_camera", "terrain_birdseye_camera"]
 
 _AXES = {"x": 0, "y": 1, "z": 2}
 
@@ -113,3 +113,45 @@ def oblique_camera(
     # Straight down the axis, "up" in the image is the front axis.
     view_up = up if elevation < 90.0 else -front
     return framed_camera(bounds, direction, view_up, **kwargs)
+
+
+def terrain_birdseye_camera(
+    bounds: Sequence[float],
+    *,
+    azimuth: float = 135.0,
+    elevation: float = 35.0,
+    view_angle: float = 30.0,
+    aspect: float = 4 / 3,
+    margin: float = 0.05,
+) -> tuple[tuple[float, ...], tuple[float, ...], tuple[float, float, float]]:
+    """A perspective camera looking down at the centre of ``bounds`` from a compass direction.
+
+    Parameters
+    ----------
+    bounds : (xmin, xmax, ymin, ymax, zmin, zmax)
+        Of the surface, with +x east, +y north and +z up (as ``pyvista.DataSet.bounds``).
+    azimuth : float, default: 135.0
+        Compass direction of the eye seen from the centre, in degrees clockwise from north
+        (GDAL's convention); 135 is south-east.
+    elevation : float, default: 35.0
+        Angle of the line of sight above the horizontal, in degrees (0 < elevation < 90).
+    view_angle : float, default: 30.0
+        The camera's vertical view angle (VTK's default), which the distance is fitted to.
+    aspect : float, default: 4/3
+        Width / height of the image.
+    margin : float, default: 0.05
+        Empty border, as a fraction of the image's half width and half height.
+
+    Returns
+    -------
+    position, focal_point, view_up : tuple of float
+        As accepted by :func:`sciviz_gbuf.capture`'s ``camera``. The eye is as close as it can
+        be with all eight corners of ``bounds`` in view.
+    """
+    if not 0.0 < elevation < 90.0:
+        raise InputError(f"elevation: expected degrees in (0, 90), got {elevation!r}")
+    az, el = np.radians(azimuth), np.radians(elevation)
+    to_eye = (np.sin(az) * np.cos(el), np.cos(az) * np.cos(el), np.sin(el))
+    return framed_camera(
+        bounds, to_eye, (0.0, 0.0, 1.0), view_angle=view_angle, aspect=aspect, margin=margin
+    )

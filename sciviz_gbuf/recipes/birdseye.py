@@ -1,0 +1,437 @@
+"""Bird's-eye maps and the sumi-e of a DEM (Saito & Takahashi 1990 §4.3, Figs. 12 and 13).
+
+The terrain surface is rendered once with :func:`~sciviz_gbuf.capture` (G-buffers ``sz``,
+normals, world x/y/z and the true height ``elevation``); every picture after that is image
+processing on the kept G-buffer: contour lines of the height (``cn``, constant width in pixels
+however far the ground), relief from the normals (``sh``), profile lines from ``sz`` (``pr``,
+ridges against what lies behind them) and colour bands, combined as ``mx2`` (pr + sh) and
+``mx4`` (pr + cn + sh + bands). Pass the G-buffer back in to try other parameters without
+rendering again.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+
+import numpy as np
+
+from .._progress import progress
+from ..capture import capture
+from ..errors import InputError
+from ..filters import color_bands, contour_lines, lambert, profile_edges
+from ..gbuffer import GBuffer
+from ..readers import DEM
+from .framing import terrain_birdseye_camera
+from .terrain import (
+    CONTOUR_COLOR,
+    _check_bands,
+    _colour,
+    as_dem,
+    lit,
+    nice_intervals,
+    relief_light,
+)
+
+__all__ = [
+    "PAPER",
+    "birdseye_gbuffer",
+    "birdseye_layers",
+    "birdseye_map",
+    "birdseye_panels",
+    "sumi_e",
+]
+
+#: Warm rice-paper white of the sumi-e.
+PAPER = (0.96, 0.94, 0.88)
+# A surface of at most about this many points is rendered (every step-th DEM cell): finer than
+# the pixels of any usual window, and VTK renders it in well under a second.
+_MAX_POINTS = 2_000_000
+
+
+def _sun(azimuth: float, altitude: float) -> tuple[float, float, float]:
+    """Unit vector towards the sun, x east, y north, z up (GDAL's azimuth and altitude)."""
+    az, alt = np.radians(azimuth), np.radians(altitude)
+    return (np.sin(az) * np.cos(alt), np.cos(az) * np.cos(alt), np.sin(alt))
+
+
+def birdseye_gbuffer(
+    dem: DEM | str | os.PathLike | np.ndarray,
+    *,
+    view_azimuth: float = 135.0,
+    elevation_angle: float = 35.0,
+    view_angle: float = 30.0,
+    window_size: Sequence[int] = (1024, 768),
+    vert_exag: float = 1.0,
+    supersample: int = 2,
+    step: int | None = None,
+    progress_bar: bool = False,
+) -> GBuffer:
+    """Render a DEM's surface from above at an angle and keep its G-buffers.
+
+    Parameters
+    ----------
+    dem : DEM, path, array or xarray.DataArray
+        Anything :func:`~sciviz_gbuf.readers.read_dem` reads.
+    view_azimuth : float, default: 135
+        Compass direction of the eye seen from the terrain's centre (degrees clockwise from
+        north; 135: looking north-west from the south-east).
+    elevation_angle : float, default: 35
+        Angle of the line of sight above the horizon, in (0, 90) degrees.
+    view_angle : float, default: 30
+        Vertical view angle of the perspective camera.
+    window_size : (int, int), default: (1024, 768)
+    vert_exag : float, default: 1
+        Vertical exaggeration of the surface (matplotlib's ``vert_exag``).
+    supersample : int, default: 2
+        Render at this many times the size (antialiasing of every layer).
+    step : int, optional
+        Render every ``step``-th cell; default the smallest step giving at most about two
+        million points.
+    progress_bar : bool, default: False
+
+    Returns
+    -------
+    GBuffer
+        With scalar ``"elevation"`` (the true heights, not exaggerated).
+    """
+    d = as_dem(dem)
+    if not (np.isfinite(vert_exag) and vert_exag > 0):
+        raise InputError(f"vert_exag: expected a finite number > 0, got {vert_exag!r}")
+    if not d.mask.any():
+        raise InputError(f"{d.source or 'DEM'}: no valid heights to render")
+    if step is None:
+        step = max(1, int(np.ceil(np.sqrt(d.heights.size / _MAX_POINTS))))
+    surface = d.to_pyvista(z_factor=vert_exag, step=step)
+    w, h = (int(v) for v in window_size)
+    camera = terrain_birdseye_camera(
+        surface.bounds,
+        azimuth=view_azimuth,
+        elevation=elevation_angle,
+        view_angle=view_angle,
+        aspect=w / max(h, 1),
+    )
+    return capture(
+        surface,
+        window_size=(w, h),
+        camera=camera,
+        scalars=["elevation"],
+        supersample=supersample,
+        progress_bar=progress_bar,
+    )
+
+
+def _gbuffer_of(dem_or_gbuffer, **capture_opts) -> GBuffer:
+    if isinstance(dem_or_gbuffer, GBuffer):
+        if "elevation" not in dem_or_gbuffer.scalars:
+            raise InputError(
+                "gbuffer: expected a G-buffer with the 'elevation' scalar (birdseye_gbuffer)"
+            )
+        return dem_or_gbuffer
+    return birdseye_gbuffer(dem_or_gbuffer, **capture_opts)
+
+
+def birdseye_layers(
+    gb: GBuffer,
+    *,
+    interval: float | None = None,
+    major_interval: float | None = None,
+    width: float = 1.0,
+    major_width: float = 2.0,
+    dense_spacing: float = 4.0,
+    profile_width: float = 1.5,
+    bands: bool | str | float | Sequence[float] = True,
+    cmap: str | object | None = None,
+    sea_level: float | None = None,
+    vmin: float | None = None,
+    vmax: float | None = None,
+    azimuth: float = 315.0,
+    altitude: float = 45.0,
+) -> dict[str, np.ndarray]:
+    """The enhanced images of a bird's-eye G-buffer, at its output size (1990 Fig. 12).
+
+    Returns
+    -------
+    dict
+        ``cn`` contour ink, ``pr`` profile ink, ``sh`` relief shade (1 = lit by the sun at
+        ``azimuth``/``altitude``), ``bands`` RGB colour bands (float32 (H, W, 3)), ``alpha``
+        coverage, ``wz`` true height (NaN on the background), ``depth`` the eye distance
+        normalised to [0, 1] over the terrain (near 0), all float32.
+    """
+    k = gb.supersample
+    mask = gb.mask
+    elev = np.where(mask, gb.scalars["elevation"], np.float32(np.nan))
+    valid = np.isfinite(elev)
+    lo = float(np.nanmin(elev)) if valid.any() else 0.0
+    hi = float(np.nanmax(elev)) if valid.any() else 1.0
+    minor, major = nice_intervals(lo, hi)
+    if interval is None and major_interval is None:
+        interval, major_interval = minor, major
+    elif interval is None:
+        interval = float(major_interval) / 5.0
+    cn = contour_lines(
+        elev,
+        interval=interval,
+        major_interval=major_interval,
+        width=width * k,
+        major_width=major_width * k,
+        dense_spacing=dense_spacing * k,
+    )
+    sh = lambert(gb.world_normal(), light=_sun(azimuth, altitude), mask=valid)
+    opts = _check_bands(bands, major_interval if major_interval is not None else 5 * interval)
+    if opts is None:
+        rgb = np.ones((*elev.shape, 3), dtype=np.float32)
+    else:
+        rgb = color_bands(
+            elev,
+            cmap=cmap,
+            sea_level=sea_level,
+            vmin=lo if vmin is None else vmin,
+            vmax=hi if vmax is None else vmax,
+            **opts,
+        )[..., :3]
+    depth = np.where(valid, gb.depth, np.nan)
+    if valid.any():
+        dlo, dhi = float(np.nanmin(depth)), float(np.nanmax(depth))
+        depth = (depth - dlo) / max(dhi - dlo, 1e-12)
+    rgb = np.where(valid[..., None], rgb, np.nan)
+    return {
+        "cn": np.nan_to_num(gb.downsample(np.where(valid, cn, np.nan))),
+        "pr": profile_edges(gb, width=profile_width),
+        "sh": np.nan_to_num(gb.downsample(sh), nan=1.0),
+        "bands": np.nan_to_num(gb.downsample(rgb), nan=1.0),
+        "alpha": gb.downsample(valid.astype(np.float32)),
+        "wz": gb.downsample(elev),
+        "depth": gb.downsample(depth.astype(np.float32)),
+    }
+
+
+def _rgba(rgb: np.ndarray, alpha: np.ndarray, background) -> np.ndarray:
+    """uint8 RGBA: ``rgb`` with coverage ``alpha``, transparent where nothing was rendered (or
+    over an opaque ``background`` colour)."""
+    rgb = np.clip(np.asarray(rgb, np.float32), 0.0, 1.0)
+    if rgb.ndim == 2:
+        rgb = np.repeat(rgb[..., None], 3, axis=2)
+    a = np.clip(alpha, 0.0, 1.0)[..., None]
+    if background is not None:
+        bg = _colour(background, "background")
+        rgb, a = rgb * a + bg * (1.0 - a), np.ones_like(a)
+    out = np.empty((*rgb.shape[:2], 4), dtype=np.uint8)
+    out[..., :3] = np.rint(rgb * 255.0)
+    out[..., 3] = np.rint(a[..., 0] * 255.0)
+    return out
+
+
+def birdseye_panels(
+    dem_or_gbuffer: DEM | GBuffer | str | os.PathLike | np.ndarray,
+    *,
+    contour_color: Sequence[float] = CONTOUR_COLOR,
+    background: Sequence[float] | None = None,
+    capture_options: dict | None = None,
+    **layer_options,
+) -> dict[str, np.ndarray]:
+    """The four pictures of the 1990 Fig. 12 as RGBA uint8: ``cn``, ``pr``, ``mx2``, ``mx4``,
+    plus ``sh`` (see :func:`birdseye_map` for the parameters)."""
+    gb = _gbuffer_of(dem_or_gbuffer, **(capture_options or {}))
+    lay = birdseye_layers(gb, **layer_options)
+    colour = _colour(contour_color, "contour_color")
+    alt = float(layer_options.get("altitude", 45.0))
+    flat = np.float32(max(np.sin(np.radians(alt)), 1e-3))
+    coloured = lit(lay["bands"], relief_light(lay["sh"] / flat))
+    white = np.ones_like(lay["bands"])
+    cn, pr = lay["cn"][..., None], lay["pr"][..., None]
+    grey = np.clip(0.2 + 0.8 * lay["sh"], 0.0, 1.0)[..., None] * white
+    images = {
+        "cn": white * (1.0 - cn) + colour * cn,
+        "pr": white * (1.0 - pr),
+        "sh": grey,
+        "mx2": grey * (1.0 - pr),
+        "mx4": (coloured * (1.0 - cn) + colour * cn) * (1.0 - pr),
+    }
+    return {key: _rgba(img, lay["alpha"], background) for key, img in images.items()}
+
+
+def birdseye_map(
+    dem: DEM | GBuffer | str | os.PathLike | np.ndarray,
+    *,
+    view_azimuth: float = 135.0,
+    elevation_angle: float = 35.0,
+    window_size: Sequence[int] = (1024, 768),
+    vert_exag: float = 1.0,
+    supersample: int = 2,
+    interval: float | None = None,
+    major_interval: float | None = None,
+    width: float = 1.0,
+    major_width: float = 2.0,
+    dense_spacing: float = 4.0,
+    profile_width: float = 1.5,
+    contour_color: Sequence[float] = CONTOUR_COLOR,
+    bands: bool | str | float | Sequence[float] = True,
+    cmap: str | object | None = None,
+    sea_level: float | None = None,
+    azimuth: float = 315.0,
+    altitude: float = 45.0,
+    background: Sequence[float] | None = None,
+    progress_bar: bool = False,
+) -> np.ndarray:
+    """A bird's-eye map (1990 Fig. 12 ``mx4``): profiles, contour lines, relief and colour bands
+    of a rendered DEM surface.
+
+    Parameters
+    ----------
+    dem : DEM, GBuffer, path, array or xarray.DataArray
+        A DEM to render (see :func:`birdseye_gbuffer`), or a G-buffer it made: then nothing
+        is rendered and the view options are ignored.
+    view_azimuth, elevation_angle, window_size, vert_exag, supersample
+        The view, as in :func:`birdseye_gbuffer`.
+    interval, major_interval, width, major_width, dense_spacing, contour_color
+        Contour lines of the true height, as in
+        :func:`~sciviz_gbuf.recipes.terrain.topographic_map`; widths in output pixels.
+    profile_width : float, default: 1.5
+        Width of the profile lines (ridges seen against the ground behind them, and the
+        outline).
+    bands, cmap, sea_level
+        Colour bands, as in :func:`~sciviz_gbuf.recipes.terrain.topographic_map`.
+    azimuth, altitude : float, default: 315, 45
+        The sun of the relief (GDAL's convention), lighting the surface's normals.
+    background : RGB, optional
+        Opaque background colour; default transparent.
+    progress_bar : bool, default: False
+
+    Returns
+    -------
+    (H, W, 4) uint8 RGBA
+        At ``window_size``; transparent where no valid terrain was rendered (the sky, nodata
+        holes), antialiased at the outline.
+    """
+    with progress(progress_bar, 3, "bird's-eye map") as bar:
+        gb = _gbuffer_of(
+            dem,
+            view_azimuth=view_azimuth,
+            elevation_angle=elevation_angle,
+            window_size=window_size,
+            vert_exag=vert_exag,
+            supersample=supersample,
+        )
+        bar.step("enhance")
+        panels = birdseye_panels(
+            gb,
+            contour_color=contour_color,
+            background=background,
+            interval=interval,
+            major_interval=major_interval,
+            width=width,
+            major_width=major_width,
+            dense_spacing=dense_spacing,
+            profile_width=profile_width,
+            bands=bands,
+            cmap=cmap,
+            sea_level=sea_level,
+            azimuth=azimuth,
+            altitude=altitude,
+        )
+        bar.step("done")
+    return panels["mx4"]
+
+
+def sumi_e(
+    dem: DEM | GBuffer | str | os.PathLike | np.ndarray,
+    *,
+    view_azimuth: float = 135.0,
+    elevation_angle: float = 20.0,
+    window_size: Sequence[int] = (1024, 768),
+    vert_exag: float = 1.5,
+    supersample: int = 2,
+    interval: float | None = None,
+    profile_width: float = 2.0,
+    wash: float = 12.0,
+    mist: float = 0.6,
+    paper: Sequence[float] | None = PAPER,
+    progress_bar: bool = False,
+) -> np.ndarray:
+    """A sumi-e (Indian-ink painting) of a DEM from its contour lines and ``sz`` (1990 Fig. 13).
+
+    Ink for the profiles (ridge lines from ``sz``), thin strokes along the contour lines, and a
+    wash that is darkest just below each ridge line and fades downhill over ``wash`` pixels.
+    All ink fades with distance (aerial perspective) and towards the valleys (``mist``).
+
+    Parameters
+    ----------
+    dem : DEM, GBuffer, path, array or xarray.DataArray
+        As in :func:`birdseye_map` (a low ``elevation_angle`` suits the style).
+    interval : float, optional
+        Contour interval of the strokes; default a fifth of the automatic major interval.
+    profile_width : float, default: 2
+        Width of the ridge lines in output pixels.
+    wash : float, default: 12
+        Pixels over which the wash below a ridge line fades (0: no wash).
+    mist : float in [0, 1], default: 0.6
+        How much the ink fades in the lowest ground (0: none).
+    paper : RGB or None, default: :data:`PAPER`
+        Paper colour; it fills the sky opaquely. None: a transparent sky.
+
+    Returns
+    -------
+    (H, W, 4) uint8 RGBA
+    """
+    if not (np.isfinite(wash) and wash >= 0):
+        raise InputError(f"wash: expected a number of pixels >= 0, got {wash!r}")
+    if not 0.0 <= float(mist) <= 1.0:
+        raise InputError(f"mist: expected a value in [0, 1], got {mist!r}")
+    with progress(progress_bar, 3, "sumi-e") as bar:
+        gb = _gbuffer_of(
+            dem,
+            view_azimuth=view_azimuth,
+            elevation_angle=elevation_angle,
+            window_size=window_size,
+            vert_exag=vert_exag,
+            supersample=supersample,
+        )
+        bar.step("ink")
+        lay = birdseye_layers(
+            gb,
+            interval=interval,
+            major_interval=None if interval is None else 5.0 * interval,
+            width=0.7,
+            major_width=0.7,
+            dense_spacing=6.0,
+            profile_width=profile_width,
+            bands=False,
+        )
+        alpha = lay["alpha"]
+        near = 1.0 - 0.75 * np.nan_to_num(lay["depth"], nan=1.0)
+        wz = lay["wz"]
+        fin = np.isfinite(wz)
+        if fin.any():
+            lo, hi = float(np.nanmin(wz)), float(np.nanmax(wz))
+            high = np.where(fin, (wz - lo) / max(hi - lo, 1e-12), 0.0)
+        else:
+            high = np.zeros_like(wz)
+        fade = near * (1.0 - mist + mist * np.sqrt(np.clip(high, 0.0, 1.0)))
+        ink = np.maximum(lay["pr"], 0.35 * lay["cn"])
+        if wash > 0:
+            ink = np.maximum(ink, 0.3 * _wash_below(lay["pr"], wash))
+        ink = np.clip(ink * fade, 0.0, 1.0) * np.minimum(alpha * 4.0, 1.0)
+        # Sumi ink is a warm black; the paper shows through in proportion.
+        sumi = np.float32([0.08, 0.07, 0.06])
+        base = np.asarray(PAPER if paper is None else paper, dtype=np.float32)
+        rgb = base * (1.0 - ink[..., None]) + sumi * ink[..., None]
+        out = _rgba(rgb, np.maximum(alpha, ink), None if paper is None else paper)
+        bar.step("done")
+    return out
+
+
+def _wash_below(profile: np.ndarray, length: float) -> np.ndarray:
+    """A wash that is darkest just below the profile lines and fades downwards over ``length``
+    pixels: per column ``exp(-d / length)`` of the distance ``d`` down from the nearest line
+    above, with the lines first widened and the result softened sideways, so that broken
+    lines do not leave vertical streaks."""
+    from scipy import ndimage
+
+    h = profile.shape[0]
+    lines = ndimage.maximum_filter1d(profile, size=5, axis=1) > 0.5
+    rows = np.arange(h, dtype=np.float32)[:, None]
+    last = np.maximum.accumulate(np.where(lines, rows, np.float32(-np.inf)), axis=0)
+    with np.errstate(over="ignore"):
+        wash = np.exp(-(rows - last) / np.float32(length)).astype(np.float32)
+    return ndimage.gaussian_filter1d(wash, sigma=max(length / 3.0, 1.0), axis=1)

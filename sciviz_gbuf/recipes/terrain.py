@@ -1,0 +1,383 @@
+"""Topographic maps of DEM grids (Saito & Takahashi 1990 §4.3, Fig. 11 ``mx3``).
+
+A plan-view map needs no rendering: the DEM grid is the G-buffer (``wz`` = height). The map is
+colour bands of height, lit by a relief shade (GDAL-compatible hillshade, optionally with cast
+shadows and a sky-view term) and overdrawn with major and minor contour lines whose minors thin
+out where they crowd (Eq. 15). Nodata cells are transparent and leave no trace at their border:
+the relief is computed on a grid whose first ring of nodata cells is linearly extrapolated, and
+the contour operator extrapolates the same way.
+
+Bird's-eye maps (Fig. 12) and the sumi-e (Fig. 13) are in :mod:`.birdseye`.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+
+from .._progress import progress
+from ..errors import InputError
+from ..filters import color_bands, contour_lines, hillshade
+from ..readers import DEM, read_dem
+
+__all__ = ["as_dem", "map_layers", "nice_intervals", "topographic_map"]
+
+#: Dark brown, the colour of contour lines on most topographic maps.
+CONTOUR_COLOR = (0.36, 0.20, 0.08)
+# Rows composited per task: bounds the float32 temporaries of a 8192-wide map to ~100 MB.
+_BLOCK_ROWS = 512
+
+
+def as_dem(dem: DEM | str | os.PathLike | np.ndarray) -> DEM:
+    """A :class:`~sciviz_gbuf.readers.DEM` as is; anything else through
+    :func:`~sciviz_gbuf.readers.read_dem` (a file, an array in metres, an xarray DataArray)."""
+    return dem if isinstance(dem, DEM) else read_dem(dem)
+
+
+def nice_intervals(lo: float, hi: float, *, majors: int = 8) -> tuple[float, float]:
+    """Minor and major contour intervals for heights in ``[lo, hi]``: about ``majors`` major
+    lines, at a round interval (1, 2, 2.5 or 5 times a power of ten), and five minors to each.
+
+    >>> nice_intervals(250.0, 1150.0)
+    (20.0, 100.0)
+    """
+    span = float(hi) - float(lo)
+    if not (math.isfinite(span) and span > 0):
+        return 0.2, 1.0
+    raw = span / majors
+    unit = 10.0 ** math.floor(math.log10(raw))
+    major = next(m * unit for m in (1.0, 2.0, 2.5, 5.0, 10.0) if m * unit >= raw * 0.999)
+    return major / 5.0, major
+
+
+def _fill_ring(z: np.ndarray) -> np.ndarray:
+    """``z`` with each nodata cell next to data replaced by a linear extrapolation of the data.
+
+    Every direction with two valid cells ``a`` (next) and ``b`` (beyond) gives ``2a - b``; their
+    mean is exact on a plane, so a 3x3 relief operator sees no step at a nodata border (GDAL's
+    rule, the centre value for a missing neighbour, halves the slope there: a bright or dark rim).
+    """
+    valid = np.isfinite(z)
+    if valid.all():
+        return z
+    h, w = z.shape
+    near = np.zeros((h + 2, w + 2), dtype=bool)
+    for di in (-1, 0, 1):
+        for dj in (-1, 0, 1):
+            near[1 + di : h + 1 + di, 1 + dj : w + 1 + dj] |= valid
+    ri, rj = np.nonzero(near[1:-1, 1:-1] & ~valid)
+    if ri.size == 0:
+        return z
+    zp = np.pad(z, 2, constant_values=np.nan)
+    total = np.zeros(ri.size)
+    count = np.zeros(ri.size)
+    near_sum = np.zeros(ri.size)
+    near_count = np.zeros(ri.size)
+    for di in (-1, 0, 1):
+        for dj in (-1, 0, 1):
+            if di == dj == 0:
+                continue
+            a = zp[ri + 2 + di, rj + 2 + dj].astype(np.float64)
+            b = zp[ri + 2 + 2 * di, rj + 2 + 2 * dj].astype(np.float64)
+            e = 2.0 * a - b
+            ok = np.isfinite(e)
+            total += np.where(ok, e, 0.0)
+            count += ok
+            ok_a = np.isfinite(a)
+            near_sum += np.where(ok_a, a, 0.0)
+            near_count += ok_a
+    out = z.copy()
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out[ri, rj] = np.where(count > 0, total / count, near_sum / near_count)
+    return out
+
+
+def relief_light(direct: np.ndarray, ambient: np.ndarray | float = 1.0) -> np.ndarray:
+    """Light of a relief relative to open flat ground (1 there): two parts sun, ``direct`` (the
+    shade over that of flat ground, 0 in cast shadow), to one part sky, ``ambient``."""
+    return (np.float32(1 / 3) * ambient + np.float32(2 / 3) * direct).astype(np.float32)
+
+
+def lit(rgb: np.ndarray, light: np.ndarray) -> np.ndarray:
+    """Colours under a relief ``light``: below 1 it multiplies; above 1 (slopes facing the sun)
+    it lifts the colour up to halfway towards white. NaN light leaves the colour as it is."""
+    lt = np.nan_to_num(light, nan=1.0)[..., None]
+    return rgb * np.minimum(lt, 1.0) + (1.0 - rgb) * (0.5 * np.clip(lt - 1.0, 0.0, 1.0))
+
+
+def _flat_shade(**opts) -> float:
+    """The hillshade of flat ground for these options (``sin(altitude)`` for most variants)."""
+    return float(hillshade(np.zeros((3, 3), np.float32), **opts)[1, 1])
+
+
+def _check_bands(bands, major: float):
+    """``bands`` -> ``(interval, levels, continuous)`` for :func:`color_bands`, or None."""
+    if bands is False or bands is None:
+        return None
+    if bands is True:
+        return {"interval": major}
+    if isinstance(bands, str):
+        if bands == "continuous":
+            return {}
+        raise InputError(
+            f"bands: expected True, False, 'continuous', an interval or a list of levels, "
+            f"got {bands!r}"
+        )
+    if np.ndim(bands) == 0:
+        v = float(bands)
+        if not (math.isfinite(v) and v > 0):
+            raise InputError(f"bands: expected an interval > 0, got {bands!r}")
+        return {"interval": v}
+    return {"levels": np.asarray(bands, dtype=np.float64)}
+
+
+def _colour(value: Sequence[float], name: str) -> np.ndarray:
+    c = np.asarray(value, dtype=np.float32).reshape(-1)
+    if c.size != 3 or not np.all((c >= 0) & (c <= 1)):
+        raise InputError(f"{name}: expected an RGB triple in [0, 1], got {value!r}")
+    return c
+
+
+def map_layers(
+    heights: np.ndarray,
+    *,
+    dx: float,
+    dy: float,
+    interval: float | None,
+    major_interval: float | None,
+    contours: bool,
+    width: float,
+    major_width: float,
+    dense_spacing: float,
+    bands: object,
+    cmap: object,
+    sea_level: float | None,
+    relief: bool,
+    azimuth: float,
+    altitude: float,
+    z_factor: float,
+    variant: str,
+    shadows: bool,
+    sky_view: bool,
+    vmin: float | None = None,
+    vmax: float | None = None,
+    bar=None,
+) -> dict[str, np.ndarray | None]:
+    """The layers of a plan-view map: ``ink`` (contours), ``light`` (relief factor, 1 on open
+    flat ground) and the band options; see :func:`topographic_map`."""
+    z = heights
+    valid = np.isfinite(z)
+    data = z[valid]
+    lo = float(data.min()) if data.size else 0.0
+    hi = float(data.max()) if data.size else 1.0
+    auto_minor, auto_major = nice_intervals(lo, hi)
+    if interval is None and major_interval is None:
+        interval, major_interval = auto_minor, auto_major
+    elif interval is None:
+        interval = float(major_interval) / 5.0
+    layers: dict[str, object] = {"lo": lo if vmin is None else vmin}
+    layers["hi"] = hi if vmax is None else vmax
+    layers["ink"] = None
+    if contours:
+        layers["ink"] = contour_lines(
+            z,
+            interval=interval,
+            major_interval=major_interval,
+            width=width,
+            major_width=major_width,
+            dense_spacing=dense_spacing,
+        )
+    if bar is not None:
+        bar.step("relief")
+    layers["light"] = None
+    if relief:
+        opts = {"azimuth": azimuth, "altitude": altitude, "z_factor": z_factor, "variant": variant}
+        sh = hillshade(_fill_ring(z), dx=dx, dy=dy, **opts)
+        flat = _flat_shade(dx=dx, dy=dy, **opts)
+        direct = sh / np.float32(max(flat, 1e-3))
+        if shadows:
+            from ..filters import cast_shadows
+
+            direct *= cast_shadows(
+                z, dx=dx, dy=dy, azimuth=azimuth, altitude=altitude, z_factor=z_factor
+            )
+        ambient = np.float32(1.0)
+        if sky_view:
+            from ..filters import sky_view as sky_view_factor
+
+            ambient = sky_view_factor(z, dx=dx, dy=dy, z_factor=z_factor)
+        light = relief_light(direct, ambient)
+        light[~valid] = np.nan
+        layers["light"] = light.astype(np.float32, copy=False)
+    band_interval = major_interval if major_interval is not None else 5.0 * float(interval)
+    layers["bands"] = _check_bands(bands, band_interval)
+    layers["cmap"], layers["sea_level"] = cmap, sea_level
+    return layers
+
+
+def _composite_block(
+    z: np.ndarray,
+    light: np.ndarray | None,
+    ink: np.ndarray | None,
+    layers: dict,
+    colour: np.ndarray,
+) -> np.ndarray:
+    """RGBA uint8 of one block of rows: bands x relief, then ink over it."""
+    valid = np.isfinite(z)
+    opts = layers["bands"]
+    if opts is None:
+        rgb = np.ones((*z.shape, 3), dtype=np.float32)
+    else:
+        rgba = color_bands(
+            z,
+            cmap=layers["cmap"],
+            sea_level=layers["sea_level"],
+            vmin=layers["lo"],
+            vmax=layers["hi"],
+            **opts,
+        )
+        rgb = rgba[..., :3]
+    if light is not None:
+        rgb = lit(rgb, light)
+    if ink is not None:
+        a = ink[..., None]
+        rgb = rgb * (1.0 - a) + colour * a
+    out = np.empty((*z.shape, 4), dtype=np.uint8)
+    out[..., :3] = np.rint(np.clip(rgb, 0.0, 1.0) * 255.0)
+    out[..., 3] = np.where(valid, 255, 0)
+    out[~valid, :3] = 0
+    return out
+
+
+def composite(layers: dict, heights: np.ndarray, colour: np.ndarray) -> np.ndarray:
+    """All layers into one RGBA uint8 image, in blocks of rows on two threads (numpy releases
+    the GIL), so that the float temporaries stay small for maps of any size."""
+    h = heights.shape[0]
+    out = np.empty((*heights.shape, 4), dtype=np.uint8)
+
+    def block(r0: int) -> None:
+        r1 = min(r0 + _BLOCK_ROWS, h)
+        sl = slice(r0, r1)
+        light = None if layers["light"] is None else layers["light"][sl]
+        ink = None if layers["ink"] is None else layers["ink"][sl]
+        out[sl] = _composite_block(heights[sl], light, ink, layers, colour)
+
+    starts = range(0, h, _BLOCK_ROWS)
+    if h <= _BLOCK_ROWS:
+        block(0)
+    else:
+        with ThreadPoolExecutor(max_workers=min(4, os.cpu_count() or 1)) as pool:
+            list(pool.map(block, starts))
+    return out
+
+
+def topographic_map(
+    dem: DEM | str | os.PathLike | np.ndarray,
+    *,
+    interval: float | None = None,
+    major_interval: float | None = None,
+    contours: bool = True,
+    width: float = 1.0,
+    major_width: float = 2.0,
+    dense_spacing: float = 4.0,
+    contour_color: Sequence[float] = CONTOUR_COLOR,
+    bands: bool | str | float | Sequence[float] = True,
+    cmap: str | object | None = None,
+    sea_level: float | None = None,
+    vmin: float | None = None,
+    vmax: float | None = None,
+    relief: bool = True,
+    azimuth: float = 315.0,
+    altitude: float = 45.0,
+    z_factor: float = 1.0,
+    variant: str = "regular",
+    shadows: bool = False,
+    sky_view: bool = False,
+    progress_bar: bool = False,
+) -> np.ndarray:
+    """A plan-view topographic map of a DEM: colour bands, relief and contour lines (1990 Fig. 11
+    ``mx3``), one pixel per DEM cell.
+
+    Parameters
+    ----------
+    dem : DEM, path, array or xarray.DataArray
+        Anything :func:`~sciviz_gbuf.readers.read_dem` reads (arrays: 1 m pixels).
+    interval, major_interval : float, optional
+        Minor and major contour intervals in height units. Default: round intervals giving
+        about eight majors over the height range, five minors to a major
+        (:func:`nice_intervals`); ``major_interval`` alone implies minors at a fifth of it.
+    contours : bool, default: True
+        Draw contour lines at all.
+    width, major_width : float, default: 1, 2
+        Line widths in pixels.
+    dense_spacing : float, default: 4
+        Minor lines fade out where they come closer than this many pixels (Eq. 15,
+        ``c_dense`` = background for minors, = line for majors, as in Fig. 11).
+    contour_color : RGB, default: dark brown
+    bands : bool, 'continuous', float or sequence of float, default: True
+        Colour bands: True one band per major interval; a number, the band interval; a list,
+        the band edges; ``'continuous'`` a smooth ramp; False none (white paper).
+    cmap, sea_level : optional
+        Colour map and topo-bathymetry sea level of :func:`~sciviz_gbuf.filters.color_bands`.
+    vmin, vmax : float, optional
+        Heights at the ends of the colour map (default the data range): fix them to colour
+        several tiles alike.
+    relief : bool, default: True
+        Multiply the colours by a relief shade, normalised to 1 on open flat ground; slopes
+        facing the sun are lifted towards white.
+    azimuth, altitude, z_factor, variant
+        Of the relief, as in :func:`~sciviz_gbuf.filters.hillshade` (GDAL's conventions).
+    shadows : bool, default: False
+        Darken cells in the cast shadow of other terrain (rayshader's ``ray_shade``).
+    sky_view : bool, default: False
+        Darken cells that see less of the sky (valleys, pits; rayshader's ``ambient_shade``).
+    progress_bar : bool, default: False
+        Show a progress bar.
+
+    Returns
+    -------
+    (H, W, 4) uint8 RGBA
+        On the DEM's grid (row 0 north): its transform and CRS georeference the map
+        (:func:`~sciviz_gbuf.compose.write_geotiff`). Nodata cells are transparent (alpha 0).
+
+    Raises
+    ------
+    InputError
+        For anything :func:`read_dem` rejects, or an invalid parameter.
+    """
+    colour = _colour(contour_color, "contour_color")
+    with progress(progress_bar, 4, "topographic map") as bar:
+        d = as_dem(dem)
+        bar.step("contours")
+        layers = map_layers(
+            d.heights,
+            dx=d.pixel_size[0],
+            dy=d.pixel_size[1],
+            interval=interval,
+            major_interval=major_interval,
+            contours=contours,
+            width=width,
+            major_width=major_width,
+            dense_spacing=dense_spacing,
+            bands=bands,
+            cmap=cmap,
+            sea_level=sea_level,
+            relief=relief,
+            azimuth=azimuth,
+            altitude=altitude,
+            z_factor=z_factor,
+            variant=variant,
+            shadows=shadows,
+            sky_view=sky_view,
+            vmin=vmin,
+            vmax=vmax,
+            bar=bar,
+        )
+        bar.step("composite")
+        out = composite(layers, d.heights, colour)
+        bar.step("done")
+    return out

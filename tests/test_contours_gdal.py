@@ -1,0 +1,163 @@
+"""Contour lines in plan view against real ``gdal_contour`` lines on the real DEMs.
+
+GDAL's lines (marching squares between pixel centres) are sampled every 0.05 px and mapped to
+fractional pixel-centre coordinates (row, col) with the inverse of GDAL's own geotransform.
+"Within 1 px" always means a Euclidean distance <= 1 pixel, measured from a pixel *centre* to
+the nearest GDAL line sample (precision) or from a GDAL line sample to the nearest pixel centre
+with ink (recall); the sampling adds at most 0.025 px of error.
+
+Our lines are compared like for like: ``g_eps=0`` (no Eq. 11 flat-region fade; exactly flat
+pixels still get no ink), no ``c_dense`` (no Eq. 15 thinning), width 1, linear profile. The
+intervals keep lines a few pixels apart, so that "within 1 px" is not met by any ink at all;
+the half-interval shift below shows it is not.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+import shutil
+import subprocess
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy import ndimage
+from scipy.spatial import cKDTree
+
+from sciviz_gbuf.filters import contour_lines
+from sciviz_gbuf.readers import read_dem
+
+rasterio = pytest.importorskip("rasterio")
+
+SRTM = "SRTMGL3_40.09_-105.55_40.21_-105.35.asc"
+# case -> (interval, base). N10W110 is sea at exactly 0 with an atoll up to 9 m: its levels
+# sit at half metres, off the integer heights (see test_level_on_flat_sea_is_a_known_tie).
+CASES = {
+    "hugo_site.asc": (10.0, 0.0),
+    "pre_runout_DEM.asc": (20.0, 0.0),
+    SRTM: (100.0, 0.0),
+    "N10W110.hgt": (1.0, 0.5),
+    "jacksboro": (100.0, 0.0),
+}
+PRECISION = 0.98  # measured 0.987 .. 1.0
+RECALL = 0.995  # measured 0.9995 .. 1.0
+
+
+def load(case: str, data: Path, tmp_path: Path):
+    """(file for gdal_contour, our DEM): the DEM file itself, or for Matplotlib's jacksboro
+    ``.npz`` a float32 GeoTIFF with the same heights and transform that ``read_dem`` gives."""
+    if case != "jacksboro":
+        src = data / "dem" / case
+    else:
+        from matplotlib.cbook import get_sample_data
+
+        src = Path(get_sample_data("jacksboro_fault_dem.npz", asfileobj=False))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)  # no CRS: "taken as degrees"
+        dem = read_dem(src)
+    if case != "jacksboro":
+        return src, dem
+    src = tmp_path / "jacksboro.tif"
+    h, w = dem.heights.shape
+    profile = {"driver": "GTiff", "width": w, "height": h, "count": 1, "dtype": "float32"}
+    transform = rasterio.Affine.from_gdal(*dem.transform)
+    with rasterio.open(src, "w", nodata=float("nan"), transform=transform, **profile) as ds:
+        ds.write(dem.heights, 1)
+    return src, dem
+
+
+def gdal_samples(src: Path, interval: float, base: float, tmp_path: Path) -> np.ndarray:
+    """``gdal_contour -i interval -off base`` lines as (N, 2) (row, col) pixel-centre samples."""
+    if shutil.which("gdal_contour") is None:
+        pytest.skip("gdal_contour (gdal-bin) is not installed")
+    out = tmp_path / "contours.geojson"
+    cmd = ["gdal_contour", "-q", "-i", repr(interval), "-off", repr(base), "-f", "GeoJSON"]
+    subprocess.run([*cmd, str(src), str(out)], check=True, capture_output=True)
+    with rasterio.open(src) as ds:
+        x0, dx, rx, y0, ry, dy = ds.transform.to_gdal()
+    inv = np.linalg.inv([[dx, rx], [ry, dy]])
+    pts = []
+    for feature in json.loads(out.read_text())["features"]:
+        geom = feature["geometry"]
+        parts = geom["coordinates"] if geom["type"] == "MultiLineString" else [geom["coordinates"]]
+        for line in parts:
+            # corners -> pixel-centre coordinates: GDAL's values sit at the pixel centres
+            cr = (np.asarray(line, float)[:, :2] - [x0, y0]) @ inv.T - 0.5
+            for a, b in itertools.pairwise(cr):
+                n = int(np.ceil(np.hypot(*(b - a)) / 0.05)) + 1
+                pts.append(a + (b - a) * np.linspace(0.0, 1.0, n)[:, None])
+    return np.concatenate(pts)[:, ::-1]
+
+
+def no_crossing(z: np.ndarray, interval: float, base: float) -> np.ndarray:
+    """Pixels with no level between their value and any of their 8 neighbours' (nor a border
+    or nodata neighbour): ink there comes from a level the data approach but never cross."""
+    k = np.floor((z - base) / interval)
+    hi = ndimage.maximum_filter(np.nan_to_num(k, nan=-1e9), 3, mode="constant", cval=-1e9)
+    lo = ndimage.minimum_filter(np.nan_to_num(k, nan=1e9), 3, mode="constant", cval=1e9)
+    return hi == lo
+
+
+def compare(z, pts, *, interval, base):
+    """(precision, recall, ink). Precision: share of pixels with ink >= 0.5 whose centre lies
+    within 1 px of a GDAL line, leaving out (a) the grid's outer ring and pixels next to
+    nodata, where our border rule (linear extrapolation) estimates the gradient one-sidedly
+    while GDAL interpolates only between valid pixel centres,
+    and (b) near misses, pixels without any level crossing in their 3x3 neighbourhood (a
+    summit or ridge within ``g`` below a level: ``|s - p| / g`` is small, yet no line exists).
+    Recall: share of GDAL samples within 1 px of a pixel centre with ink > 0.25."""
+    ink = contour_lines(z, interval=interval, base=base, width=1.0, g_eps=0.0)
+    dark = ink >= 0.5
+    edge = ndimage.binary_dilation(~np.isfinite(z), np.ones((3, 3), bool))
+    edge[[0, -1], :] = edge[:, [0, -1]] = True
+    judged = np.argwhere(dark & ~edge & ~no_crossing(z, interval, base))
+    d_ours, _ = cKDTree(pts).query(judged, distance_upper_bound=2.0)
+    d_gdal, _ = cKDTree(np.argwhere(ink > 0.25)).query(pts, distance_upper_bound=2.0)
+    return np.mean(d_ours <= 1.0), np.mean(d_gdal <= 1.0), ink
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_lines_sit_on_gdal_contour_lines(case, shared_data, tmp_path):
+    src, dem = load(case, shared_data, tmp_path)
+    with rasterio.open(src) as ds:  # our georeference is GDAL's
+        np.testing.assert_allclose(dem.transform, ds.transform.to_gdal(), rtol=1e-12, atol=1e-9)
+    interval, base = CASES[case]
+    pts = gdal_samples(src, interval, base, tmp_path)
+    precision, recall, ink = compare(dem.heights, pts, interval=interval, base=base)
+    assert precision >= PRECISION, (precision, recall)
+    assert recall >= RECALL, (precision, recall)
+    assert len(pts) > 10_000  # a fair amount of line
+    # nodata cells (hugo_site is half NODATA) never get ink
+    nodata = np.isnan(dem.heights)
+    assert not ink[nodata].any()
+    if case == "hugo_site.asc":
+        assert nodata.mean() > 0.3
+
+
+@pytest.mark.parametrize("case", [c for c in CASES if c != "N10W110.hgt"])
+def test_lines_half_an_interval_off_miss_gdal(case, shared_data, tmp_path):
+    """The comparison can fail: our lines at ``base + interval / 2`` fall mostly > 1 px from
+    GDAL's (N10W110 is left out: its shifted levels land on the sea's exact 0, the tie below)."""
+    src, dem = load(case, shared_data, tmp_path)
+    interval, base = CASES[case]
+    pts = gdal_samples(src, interval, base, tmp_path)
+    precision, recall, _ = compare(dem.heights, pts, interval=interval, base=base + interval / 2)
+    assert precision < 0.6, precision
+    assert recall < 0.6, recall
+
+
+def test_level_on_flat_sea_is_a_known_tie(shared_data, tmp_path):
+    """A level at exactly the sea's height (0 m): GDAL nudges values equal to a level 1e-6 up,
+    so it draws no line along the shore; we ink the sea pixels next to land (``t = 0``)."""
+    src, dem = load("N10W110.hgt", shared_data, tmp_path)
+    pts = gdal_samples(src, 2.0, 0.0, tmp_path)
+    precision, recall, ink = compare(dem.heights, pts, interval=2.0, base=0.0)
+    assert recall >= RECALL
+    sea_next_to_land = (dem.heights == 0) & ndimage.binary_dilation(
+        dem.heights > 0, np.ones((3, 3), bool)
+    )
+    assert ink[sea_next_to_land].min() == 1.0
+    assert ink[(dem.heights == 0) & ~sea_next_to_land].max() == 0.0  # flat sea: no ink
+    assert precision < PRECISION
