@@ -11,6 +11,8 @@ from .camera import CameraInfo
 from .capture import capture
 from .errors import InputError, RenderError, SciVizGBufError
 from .gbuffer import GBuffer
+from .recipes.birdseye import birdseye_map, sumi_e
+from .recipes.terrain import topographic_map
 
 __version__ = "0.1.0"
 
@@ -21,5 +23,8 @@ __all__ = [
     "RenderError",
     "SciVizGBufError",
     "__version__",
+    "birdseye_map",
     "capture",
+    "sumi_e",
+    "topographic_map",
 ]

@@ -130,6 +130,156 @@ def _cmd_edges(args: argparse.Namespace) -> int:
     return 0
 
 
+def _show_progress(args: argparse.Namespace) -> bool:
+    """``--progress``/``--no-progress``, else on only when stderr is a terminal."""
+    return sys.stderr.isatty() if args.progress is None else bool(args.progress)
+
+
+def _png_output(text: str) -> Path:
+    out = Path(text)
+    if out.suffix.lower() != ".png":
+        raise InputError(f"--output: expected a file name ending in .png, got {text!r}")
+    if not out.parent.is_dir():
+        raise InputError(f"--output: no such directory {str(out.parent)!r}")
+    return out
+
+
+def _contours(text: str) -> tuple[float, float] | str | None:
+    """``MINOR,MAJOR``, ``MAJOR`` alone (minors at a fifth), ``none`` or ``auto``."""
+    t = text.strip().lower()
+    if t in ("none", "auto"):
+        return t
+    try:
+        vals = [float(v) for v in t.split(",")]
+    except ValueError:
+        vals = []
+    if not (1 <= len(vals) <= 2 and all(math.isfinite(v) and v > 0 for v in vals)):
+        raise argparse.ArgumentTypeError(
+            f"expected MINOR,MAJOR intervals such as 20,100 (or one major interval, 'auto', "
+            f"'none'), got {text!r}"
+        )
+    if len(vals) == 1:
+        return vals[0] / 5.0, vals[0]
+    if vals[1] < vals[0]:
+        raise argparse.ArgumentTypeError(f"expected MINOR <= MAJOR, got {text!r}")
+    return vals[0], vals[1]
+
+
+def _bands(text: str):
+    """``auto`` (one per major interval), ``none``, ``continuous``, an interval or ``L1,L2,...``."""
+    t = text.strip().lower()
+    if t in ("auto", "none", "continuous"):
+        return {"auto": True, "none": False}.get(t, t)
+    try:
+        vals = [float(v) for v in t.split(",")]
+    except ValueError:
+        vals = []
+    if not vals or not all(math.isfinite(v) for v in vals) or (len(vals) == 1 and vals[0] <= 0):
+        raise argparse.ArgumentTypeError(
+            f"expected auto, none, continuous, an interval > 0 or levels L1,L2,..., got {text!r}"
+        )
+    return vals[0] if len(vals) == 1 else vals
+
+
+def _read_terrain(source: str | None):
+    from .datasets import load_jacksboro_dem
+    from .readers import read_dem
+
+    return load_jacksboro_dem() if source is None else read_dem(source)
+
+
+def _contour_options(spec) -> dict:
+    if spec == "none":
+        return {"contours": False}
+    if spec == "auto":
+        return {}
+    return {"interval": spec[0], "major_interval": spec[1]}
+
+
+def _cmd_topo(args: argparse.Namespace) -> int:
+    from ._progress import progress
+    from .compose import write_geotiff, write_png
+    from .recipes.terrain import topographic_map
+
+    out = _png_output(args.output)
+    if args.geotiff is not None:
+        tif = Path(args.geotiff)
+        if tif.suffix.lower() not in (".tif", ".tiff") or not tif.parent.is_dir():
+            raise InputError(
+                f"--geotiff: expected a .tif/.tiff file in an existing folder, got {args.geotiff!r}"
+            )
+    t0 = time.perf_counter()
+    show = _show_progress(args)
+    with progress(show, 2 + (args.geotiff is not None), "topo") as bar:
+        dem = _read_terrain(args.dem)
+        bar.step("map")
+        rgba = topographic_map(
+            dem,
+            **_contour_options(args.contours),
+            width=args.width,
+            major_width=args.major_width,
+            bands=args.bands,
+            cmap=args.cmap,
+            sea_level=args.sea_level,
+            relief=not args.no_relief,
+            azimuth=args.azimuth,
+            altitude=args.altitude,
+            z_factor=args.z_factor,
+            variant=args.variant,
+            shadows=args.shadows,
+            sky_view=args.sky_view,
+            progress_bar=show,
+        )
+        bar.step("write")
+        write_png(out, rgba)
+        if args.geotiff is not None:
+            write_geotiff(args.geotiff, rgba, dem=dem)
+            bar.step("geotiff")
+    h, w = dem.shape
+    extra = f" and {args.geotiff}" if args.geotiff else ""
+    print(f"wrote {out}{extra} ({w}x{h}) in {time.perf_counter() - t0:.1f} s")
+    return 0
+
+
+def _cmd_birdseye(args: argparse.Namespace) -> int:
+    from .compose import write_png
+    from .recipes.birdseye import birdseye_gbuffer, birdseye_panels, sumi_e
+
+    out = _png_output(args.output)
+    t0 = time.perf_counter()
+    show = _show_progress(args)
+    dem = _read_terrain(args.dem)
+    gb = birdseye_gbuffer(
+        dem,
+        view_azimuth=args.view_azimuth,
+        elevation_angle=args.elevation_angle,
+        window_size=args.size,
+        vert_exag=args.vert_exag,
+        supersample=args.supersample,
+        progress_bar=show,
+    )
+    if args.save_gbuffer:
+        gb.save(args.save_gbuffer)
+    if args.style == "sumi-e":
+        opts = {} if args.contours in ("auto", "none") else {"interval": args.contours[0]}
+        image = sumi_e(gb, **opts)
+    else:
+        panels = birdseye_panels(
+            gb,
+            **_contour_options(args.contours),
+            bands=args.bands,
+            cmap=args.cmap,
+            sea_level=args.sea_level,
+            azimuth=args.azimuth,
+            altitude=args.altitude,
+        )
+        image = panels[args.style]
+    write_png(out, image)
+    w, h = args.size
+    print(f"wrote {out} ({w}x{h}, {args.style}) in {time.perf_counter() - t0:.1f} s")
+    return 0
+
+
 def _cmd_info(args: argparse.Namespace) -> int:
     from .gbuffer import GBuffer
 
@@ -141,6 +291,151 @@ def _cmd_info(args: argparse.Namespace) -> int:
     print(f"  camera position {c.position}, focal point {c.focal_point}, view up {c.view_up}")
     print(f"  clipping range {c.clipping_range}, pixel size {c.pixel_size:.6g}")
     return 0
+
+
+def _add_progress(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--progress",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="show a progress bar (default: only when stderr is a terminal)",
+    )
+
+
+def _add_map_style(p: argparse.ArgumentParser) -> None:
+    """Options shared by the plan-view and bird's-eye maps."""
+    p.add_argument(
+        "dem",
+        nargs="?",
+        help="DEM file: GeoTIFF, .asc, .hgt, USGS .dem, .npy/.npz (default: the bundled "
+        "Jacksboro fault DEM from Matplotlib's sample data)",
+    )
+    p.add_argument("-o", "--output", required=True, help="output image (.png)")
+    p.add_argument(
+        "--contours",
+        type=_contours,
+        default="auto",
+        metavar="MINOR,MAJOR",
+        help="contour intervals in height units, e.g. 20,100; one number is the major interval "
+        "(minors at a fifth); 'none' draws none (default: about 8 round majors)",
+    )
+    p.add_argument(
+        "--bands",
+        type=_bands,
+        default=True,
+        metavar="SPEC",
+        help="colour bands: auto (one per major interval), none, continuous, an interval, or "
+        "band edges L1,L2,...",
+    )
+    p.add_argument("--cmap", default=None, help="matplotlib colour map of the bands")
+    p.add_argument(
+        "--sea-level",
+        type=_number(lambda v: True, "a height"),
+        default=None,
+        help="topo-bathymetry: heights below it get sea colours",
+    )
+    p.add_argument(
+        "--azimuth",
+        type=_number(lambda v: True, "degrees"),
+        default=315.0,
+        help="sun direction, degrees clockwise from north (default 315)",
+    )
+    p.add_argument(
+        "--altitude",
+        type=_number(lambda v: 0 < v <= 90, "degrees in (0, 90]"),
+        default=45.0,
+        help="sun altitude above the horizon in degrees (default 45)",
+    )
+
+
+def _add_topo(sub) -> None:
+    p = sub.add_parser(
+        "topo",
+        help="plan-view topographic map of a DEM: bands, relief, contours (PNG, GeoTIFF)",
+        description="Colour bands, GDAL-compatible relief and major/minor contour lines of a "
+        "DEM on its own grid (Saito & Takahashi 1990, Fig. 11). Nodata is transparent.",
+    )
+    _add_map_style(p)
+    p.add_argument(
+        "--geotiff",
+        default=None,
+        metavar="FILE.tif",
+        help="also write an RGBA GeoTIFF with the DEM's CRS and transform",
+    )
+    p.add_argument(
+        "--width",
+        type=_number(lambda v: v > 0, "a line width in pixels > 0"),
+        default=1.0,
+        help="minor contour width in pixels (default 1)",
+    )
+    p.add_argument(
+        "--major-width",
+        type=_number(lambda v: v > 0, "a line width in pixels > 0"),
+        default=2.0,
+        help="major contour width in pixels (default 2)",
+    )
+    p.add_argument(
+        "--z-factor",
+        type=_number(lambda v: v > 0, "a number > 0"),
+        default=1.0,
+        help="vertical exaggeration of the relief (GDAL's -z)",
+    )
+    p.add_argument(
+        "--variant",
+        default="regular",
+        choices=["regular", "combined", "multidirectional", "igor"],
+        help="hillshade variant (GDAL's)",
+    )
+    p.add_argument("--no-relief", action="store_true", help="no relief shading")
+    p.add_argument("--shadows", action="store_true", help="darken cast shadows")
+    p.add_argument("--sky-view", action="store_true", help="darken cells that see less sky")
+    _add_progress(p)
+    p.set_defaults(func=_cmd_topo)
+
+
+def _add_birdseye(sub) -> None:
+    p = sub.add_parser(
+        "birdseye",
+        help="bird's-eye map of a DEM: profiles, contours, relief, bands (or a sumi-e)",
+        description="Render the DEM surface once, then enhance its G-buffers: contour lines of "
+        "the height, relief from the normals, profile lines from sz and colour bands "
+        "(Saito & Takahashi 1990, Figs. 12 and 13).",
+    )
+    _add_map_style(p)
+    p.add_argument(
+        "--elevation-angle",
+        type=_number(lambda v: 0 < v < 90, "degrees in (0, 90)"),
+        default=35.0,
+        help="angle of the line of sight above the horizon (default 35)",
+    )
+    p.add_argument(
+        "--view-azimuth",
+        type=_number(lambda v: True, "degrees"),
+        default=135.0,
+        help="compass direction of the eye from the terrain (default 135, south-east)",
+    )
+    p.add_argument(
+        "--vert-exag",
+        type=_number(lambda v: v > 0, "a number > 0"),
+        default=1.0,
+        help="vertical exaggeration of the surface (default 1)",
+    )
+    p.add_argument("--size", type=_size, default=(1024, 768), help="image size WxH")
+    p.add_argument(
+        "--supersample", type=_positive_int, default=2, help="render at k times the size"
+    )
+    p.add_argument(
+        "--style",
+        default="mx4",
+        choices=["mx4", "mx2", "cn", "pr", "sh", "sumi-e"],
+        help="mx4: profiles + contours + relief + bands (default); mx2: profiles + relief; "
+        "cn contours; pr profiles; sh relief; sumi-e an ink painting",
+    )
+    p.add_argument(
+        "--save-gbuffer", default=None, metavar="FILE.npz", help="also save the G-buffers"
+    )
+    _add_progress(p)
+    p.set_defaults(func=_cmd_birdseye)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -222,6 +517,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--progress", action="store_true", help="show a progress bar")
     p.set_defaults(func=_cmd_edges)
+
+    _add_topo(sub)
+    _add_birdseye(sub)
 
     p = sub.add_parser("info", help="describe a saved G-buffer file")
     p.add_argument("file", help=".npz or .vti written by capture")

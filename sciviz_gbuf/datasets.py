@@ -7,7 +7,7 @@ import pyvista as pv
 
 from .errors import InputError
 
-__all__ = ["load_jacksboro_terrain", "load_nut", "metres_per_degree"]
+__all__ = ["load_jacksboro_dem", "load_jacksboro_terrain", "load_nut", "metres_per_degree"]
 
 
 def load_nut() -> pv.PolyData:
@@ -100,3 +100,19 @@ def load_jacksboro_terrain(*, vert_exag: float = 1.0) -> pv.StructuredGrid:
     grid = pv.StructuredGrid(xx.T, yy.T, zz.T)
     grid.point_data["elevation"] = elev.ravel()
     return grid
+
+
+def load_jacksboro_dem():
+    """The Jacksboro fault DEM from Matplotlib's sample data as a
+    :class:`~sciviz_gbuf.readers.DEM`: 344 x 403 cells of 3 arc-seconds, WGS84 (``EPSG:4326``).
+
+    The bundled default of the terrain commands; nothing is downloaded.
+    """
+    import dataclasses
+
+    from matplotlib import cbook
+
+    from .readers import read_dem
+
+    path = cbook.get_sample_data("jacksboro_fault_dem.npz", asfileobj=False)
+    return dataclasses.replace(read_dem(path, geographic=True), crs="EPSG:4326")

@@ -40,18 +40,38 @@ def _valid(img, mask, r, c):
 OPPOSITE = {"A": "H", "B": "G", "C": "F", "D": "E", "E": "D", "F": "C", "G": "B", "H": "A"}
 
 
+# For an axis neighbour missing together with its opposite: the two diagonals beside it; for
+# a diagonal one: the two axis neighbours beside it (plane through X and them).
+BESIDE = {"B": "AC", "D": "AF", "E": "CH", "G": "FH", "A": "BD", "C": "BE", "F": "DG", "H": "EG"}
+
+
 def _window(img, mask, r, c, extrapolate=True):
     """The documented border rule, written out: an invalid neighbour becomes 2X - opposite
-    (when the opposite one is valid and ``extrapolate``), else the centre value X."""
+    (when the opposite one is valid and ``extrapolate``); else an axis neighbour the mean of
+    the two valid diagonal ones beside it, a diagonal one ``p + q - X`` of its two axis
+    neighbours (after this rule); else the centre value X."""
     x = float(img[r, c])
+    big = float(np.finfo(np.float32).max)
     nb = {}
-    for k, (dr, dc) in OFFS.items():
+    for k in "BDEGACFH":  # axis neighbours first: the diagonals use them
+        dr, dc = OFFS[k]
         odr, odc = OFFS[OPPOSITE[k]]
         if _valid(img, mask, r + dr, c + dc):
             nb[k] = float(img[r + dr, c + dc])
         elif extrapolate and _valid(img, mask, r + odr, c + odc):
-            big = float(np.finfo(np.float32).max)
             nb[k] = float(np.clip(2 * x - float(img[r + odr, c + odc]), -big, big))
+        elif extrapolate and k in "BDEG":
+            s1, s2 = (OFFS[b] for b in BESIDE[k])
+            if _valid(img, mask, r + s1[0], c + s1[1]) and _valid(img, mask, r + s2[0], c + s2[1]):
+                mean = 0.5 * float(img[r + s1[0], c + s1[1]]) + 0.5 * float(
+                    img[r + s2[0], c + s2[1]]
+                )
+                nb[k] = float(np.clip(mean, -big, big))
+            else:
+                nb[k] = x
+        elif extrapolate:
+            p, q = BESIDE[k]
+            nb[k] = float(np.clip(nb[p] + nb[q] - x, -big, big))
         else:
             nb[k] = x
     return x, nb

@@ -17,12 +17,14 @@ from .operators import (
     suppress_zeroth_order,
 )
 from .shading import lambert
+from .terrain_light import cast_shadows, sky_view
 
 __all__ = [
     "BATHYMETRIC",
     "HYPSOMETRIC",
     "ContourPolyline",
     "c1_discontinuity",
+    "cast_shadows",
     "color_bands",
     "contour_lines",
     "contour_polylines",
@@ -40,6 +42,7 @@ __all__ = [
     "polylines_to_geojson",
     "profile_edges",
     "second_order",
+    "sky_view",
     "sobel_gradient",
     "suppress_zeroth_order",
 ]

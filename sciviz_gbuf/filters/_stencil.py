@@ -2,7 +2,9 @@
 
 Border rule, shared by every kernel here: a neighbour that is outside the image, masked, or not
 finite is replaced by the linear extrapolation ``2X - opposite neighbour`` (the opposite one
-across X), or by X itself when that one is missing too; the min/max operators (Eq. 3, 4) use X.
+across X); when that one is missing too, an axis neighbour by the mean of the two diagonal ones
+beside it and a diagonal neighbour by the plane through X and its two axis neighbours, and
+only then by X itself; the min/max operators (Eq. 3, 4) use X.
 A plane therefore gives the same response up to a coverage border as inside: the border neither
 creates nor hides an edge; the profile of an object against the background is drawn from the
 mask by :mod:`.edges`. Masked / non-finite centre pixels get the operator's neutral value.
@@ -133,14 +135,34 @@ def _ok(v, mv, inside):
 
 
 @njit(inline="always", cache=True)
-def _fill(v, ok, opp, ok_opp, x, extrapolate):
-    """A neighbour under the border rule: itself if valid; else the linear extrapolation
-    ``2X - opposite`` (so planes stay planes up to the border), else the centre value."""
+def _clamp(e):
+    return min(max(e, -_FMAX), _FMAX)  # huge inputs: stay finite, never inf - inf
+
+
+@njit(inline="always", cache=True)
+def _fill_axis(v, ok, opp, ok_opp, s1, ok1, s2, ok2, x, extrapolate):
+    """An axis neighbour under the border rule: itself if valid; else the linear extrapolation
+    ``2X - opposite``; else the mean of the two diagonal neighbours beside it (both on its
+    side); else the centre value. The first two are exact on a plane."""
     if ok:
         return v
     if extrapolate and ok_opp:
-        e = x + (x - opp)
-        return min(max(e, -_FMAX), _FMAX)  # huge inputs: stay finite, never inf - inf
+        return _clamp(x + (x - opp))
+    if extrapolate and ok1 and ok2:
+        return _clamp(_H * s1 + _H * s2)
+    return x
+
+
+@njit(inline="always", cache=True)
+def _fill_diag(v, ok, opp, ok_opp, p, q, x, extrapolate):
+    """A diagonal neighbour: itself if valid; else ``2X - opposite``; else the plane through X
+    and its two axis neighbours ``p``, ``q`` (already under the border rule): ``p + q - X``."""
+    if ok:
+        return v
+    if extrapolate and ok_opp:
+        return _clamp(x + (x - opp))
+    if extrapolate:
+        return _clamp(p + q - x)
     return x
 
 
@@ -166,14 +188,17 @@ def _pixel(code, op, neutral, u, mid, lo, mu, mm, ml, up, dn, c, cl, cr, lf, rt,
     okf = _ok(f0, ml[cl], dn & lf)
     okg = _ok(g0, ml[c], dn)
     okh = _ok(h0, ml[cr], dn & rt)
-    a = _fill(a0, oka, h0, okh, x, ext)
-    b = _fill(b0, okb, g0, okg, x, ext)
-    cc = _fill(c0, okc, f0, okf, x, ext)
-    d = _fill(d0, okd, e0, oke, x, ext)
-    e = _fill(e0, oke, d0, okd, x, ext)
-    f = _fill(f0, okf, c0, okc, x, ext)
-    g = _fill(g0, okg, b0, okb, x, ext)
-    hh = _fill(h0, okh, a0, oka, x, ext)
+    # Layout: a b c / d x e / f g h. Axis neighbours first, then diagonals from them, so
+    # that a neighbour missing together with its opposite one (a corner of a hole, or of the
+    # image next to a hole) still continues the plane.
+    b = _fill_axis(b0, okb, g0, okg, a0, oka, c0, okc, x, ext)
+    d = _fill_axis(d0, okd, e0, oke, a0, oka, f0, okf, x, ext)
+    e = _fill_axis(e0, oke, d0, okd, c0, okc, h0, okh, x, ext)
+    g = _fill_axis(g0, okg, b0, okb, f0, okf, h0, okh, x, ext)
+    a = _fill_diag(a0, oka, h0, okh, b, d, x, ext)
+    cc = _fill_diag(c0, okc, f0, okf, b, e, x, ext)
+    f = _fill_diag(f0, okf, c0, okc, d, g, x, ext)
+    hh = _fill_diag(h0, okh, a0, oka, e, g, x, ext)
     v = op(x, a, b, cc, d, e, f, g, hh, k, ax, prm)
     out[c] = v if okx else neutral
 

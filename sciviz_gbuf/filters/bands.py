@@ -10,6 +10,7 @@ import numpy as np
 
 from ..compose import _colormap_of
 from ..errors import InputError
+from . import _band_kernels as _bk
 from .operators import _finite, _image, _levels, _mask, _positive
 
 __all__ = ["BATHYMETRIC", "HYPSOMETRIC", "color_bands"]
@@ -43,34 +44,79 @@ BATHYMETRIC = _colormap("sciviz_bathymetric", _SEA)
 """Default sea colour map of :func:`color_bands`, deep to shallow."""
 
 
-def _representative(v: np.ndarray, interval, levels, base: float) -> np.ndarray:
-    """Each value replaced by the middle of its band (the value itself when continuous)."""
+def _lut(cm) -> np.ndarray:
+    return np.ascontiguousarray(np.asarray(cm(np.linspace(0.0, 1.0, _LUT)), np.float32)[:, :3])
+
+
+def _scale(lo: float, hi: float) -> tuple[float, float]:
+    """``(lo, (n - 1) / (hi - lo))`` of a ramp; scale 0 (the middle colour) when hi == lo."""
+    return lo, ((_LUT - 1) / (hi - lo) if hi > lo else 0.0)
+
+
+def band_tables(
+    data: np.ndarray,
+    *,
+    interval: float | None,
+    levels,
+    base: float,
+    cmap,
+    vmin: float | None,
+    vmax: float | None,
+    sea_level: float | None,
+    sea_cmap,
+) -> tuple:
+    """Checked parameters of :func:`color_bands` as the arguments ``(mode, base, q, levels,
+    mids, land, sea, tab)`` of the band kernels; ``data`` are the valid heights (for the default
+    ``vmin``/``vmax``; may be empty when both are given)."""
+    if interval is not None and levels is not None:
+        raise InputError("color_bands: give interval= or levels=, not both")
+    base = _finite(base, "base")
+    land = _lut(HYPSOMETRIC if cmap is None else _colormap_of(cmap, "cmap"))
+    sea = _lut(BATHYMETRIC if sea_cmap is None else _colormap_of(sea_cmap, "sea_cmap"))
+    lo = float(data.min()) if vmin is None else float(vmin)
+    hi = float(data.max()) if vmax is None else float(vmax)
+    if not (np.isfinite(lo) and np.isfinite(hi) and lo <= hi):
+        raise InputError(f"vmin, vmax: expected finite numbers with vmin <= vmax, got {lo}, {hi}")
+    lv = mids = np.zeros(1)
+    q = 1.0
     if interval is not None:
-        q = _positive(interval, "interval")
-        with np.errstate(over="ignore", invalid="ignore"):  # huge heights: the end of the map
-            return ((np.floor((v - base) / q) + 0.5) * q + base).astype(np.float32)
-    if levels is None:
-        return v
-    lv = _levels(levels)
-    # Band k lies between edges[k] and edges[k + 1]; the outer bands are as wide as their
-    # neighbours (or 1 when there is a single level).
-    gap_lo = lv[1] - lv[0] if lv.size > 1 else 1.0
-    gap_hi = lv[-1] - lv[-2] if lv.size > 1 else 1.0
-    edges = np.concatenate([[lv[0] - gap_lo], lv, [lv[-1] + gap_hi]])
-    mids = (edges[:-1] + edges[1:]) / 2
-    k = np.searchsorted(lv, v, side="right")
-    return mids[k].astype(np.float32)
+        mode, q = _bk.INTERVAL, _positive(interval, "interval")
+    elif levels is not None:
+        mode, lv = _bk.LEVELS, _levels(levels)
+        # Band k lies between edges[k] and edges[k + 1]; the outer bands are as wide as their
+        # neighbours (or 1 when there is a single level).
+        gap_lo = lv[1] - lv[0] if lv.size > 1 else 1.0
+        gap_hi = lv[-1] - lv[-2] if lv.size > 1 else 1.0
+        edges = np.concatenate([[lv[0] - gap_lo], lv, [lv[-1] + gap_hi]])
+        mids = (edges[:-1] + edges[1:]) / 2
+    else:
+        mode = _bk.CONTINUOUS
+    if sea_level is None:
+        tab = (*_scale(lo, hi), 0.0, 0.0, np.nan)
+    else:
+        s = float(sea_level)
+        if not np.isfinite(s):
+            raise InputError(f"sea_level: expected a finite number, got {sea_level!r}")
+        # Heights below the sea level take the sea colours, by the height itself: a band
+        # never puts land under the sea.
+        tab = (*_scale(s, max(hi, s)), *_scale(min(lo, s), s), s)
+    return (
+        mode,
+        np.float32(base),
+        np.float32(q),
+        lv.astype(np.float64),
+        mids.astype(np.float64),
+        land,
+        sea,
+        _float32(tab),
+    )
 
 
-def _ramp(cm, v: np.ndarray, lo: float, hi: float) -> np.ndarray:
-    lut = np.asarray(cm(np.linspace(0.0, 1.0, _LUT)), dtype=np.float32)[:, :3]
-    if hi > lo:
-        with np.errstate(over="ignore", invalid="ignore"):
-            t = (v - np.float32(lo)) * np.float32((_LUT - 1) / (hi - lo))
-    else:  # a constant image: the middle of the map
-        t = np.full(v.shape, (_LUT - 1) / 2, dtype=np.float32)
-    idx = np.clip(np.rint(np.nan_to_num(t, nan=0.0)), 0, _LUT - 1).astype(np.intp)
-    return lut[idx]
+def _float32(values) -> np.ndarray:
+    """float32 copy; a ramp scale beyond float32 (a range below 1e-35) becomes inf, which the
+    kernel handles like the end of the map."""
+    with np.errstate(over="ignore"):
+        return np.asarray(values, dtype=np.float32)
 
 
 def color_bands(
@@ -120,30 +166,21 @@ def color_bands(
     v = _image(heights, "heights")
     m = _mask(mask, v.shape)
     valid = np.isfinite(v) if m is None else np.isfinite(v) & m
-    if interval is not None and levels is not None:
-        raise InputError("color_bands: give interval= or levels=, not both")
-    base = _finite(base, "base")
-    land = HYPSOMETRIC if cmap is None else _colormap_of(cmap, "cmap")
-    sea = BATHYMETRIC if sea_cmap is None else _colormap_of(sea_cmap, "sea_cmap")
-    out = np.zeros((*v.shape, 4), dtype=np.float32)
-    if not valid.any():
+    any_valid = bool(valid.any())
+    tables = band_tables(
+        v[valid] if any_valid and (vmin is None or vmax is None) else np.zeros(1, np.float32),
+        interval=interval,
+        levels=levels,
+        base=base,
+        cmap=cmap,
+        vmin=vmin,
+        vmax=vmax,
+        sea_level=sea_level,
+        sea_cmap=sea_cmap,
+    )
+    out = np.empty((*v.shape, 4), dtype=np.float32)
+    if not any_valid:
+        out[:] = 0.0
         return out
-    data = v[valid]
-    lo = float(data.min()) if vmin is None else float(vmin)
-    hi = float(data.max()) if vmax is None else float(vmax)
-    if not (np.isfinite(lo) and np.isfinite(hi) and lo <= hi):
-        raise InputError(f"vmin, vmax: expected finite numbers with vmin <= vmax, got {lo}, {hi}")
-    rep = _representative(data, interval, levels, base)
-    if sea_level is None:
-        rgb = _ramp(land, rep, lo, hi)
-    else:
-        s = float(sea_level)
-        if not np.isfinite(s):
-            raise InputError(f"sea_level: expected a finite number, got {sea_level!r}")
-        below = data < s  # by the height itself: a band never puts land under the sea
-        rgb = np.empty((data.size, 3), dtype=np.float32)
-        rgb[below] = _ramp(sea, rep[below], min(lo, s), s)
-        rgb[~below] = _ramp(land, rep[~below], s, max(hi, s))
-    out[valid, :3] = rgb
-    out[valid, 3] = 1.0
+    _bk.band_image(v, valid, *tables, out)
     return out

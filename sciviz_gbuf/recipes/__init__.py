@@ -3,10 +3,13 @@
 - :mod:`.framing`: cameras that frame a bounding box from a given direction.
 - :mod:`.illustration`: shaded + edge illustrations of a G-buffer (the ``edges`` command).
 - :mod:`.saito1990`: the panels of Saito & Takahashi's Fig. 3 and Fig. 7 (and the 2003 edge map).
+- :mod:`.terrain`: plan-view topographic maps of DEMs (bands, relief, contours; Fig. 11).
+- :mod:`.birdseye`: bird's-eye maps and the sumi-e of DEMs (Figs. 12, 13).
 - :mod:`.contour_figures`: the panels of their Fig. 5 (contour lines), Fig. 6 (curved hatching)
   and Fig. 11 (a plan-view topographic map of the bundled DEM).
 """
 
+from .birdseye import birdseye_gbuffer, birdseye_layers, birdseye_map, birdseye_panels, sumi_e
 from .contour_figures import (
     CONTOUR_CAPTIONS,
     fig5_panels,
@@ -17,11 +20,16 @@ from .contour_figures import (
 from .framing import framed_camera, oblique_camera, terrain_birdseye_camera
 from .illustration import STYLES, fig7_edge_map, illustrate, shade_image, signed_to_grey
 from .saito1990 import CAPTIONS, fig3_panels, fig7_panels, nut_camera
+from .terrain import nice_intervals, topographic_map
 
 __all__ = [
     "CAPTIONS",
     "CONTOUR_CAPTIONS",
     "STYLES",
+    "birdseye_gbuffer",
+    "birdseye_layers",
+    "birdseye_map",
+    "birdseye_panels",
     "fig3_panels",
     "fig5_panels",
     "fig6_panels",
@@ -30,10 +38,13 @@ __all__ = [
     "fig11_panels",
     "framed_camera",
     "illustrate",
+    "nice_intervals",
     "nut_camera",
     "oblique_camera",
     "shade_image",
     "signed_to_grey",
+    "sumi_e",
     "terrain_birdseye_camera",
+    "topographic_map",
     "write_panels",
 ]

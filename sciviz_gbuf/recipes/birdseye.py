@@ -104,8 +104,11 @@ def birdseye_gbuffer(
         step = max(1, int(np.ceil(np.sqrt(d.heights.size / _MAX_POINTS))))
     surface = d.to_pyvista(z_factor=vert_exag, step=step)
     w, h = (int(v) for v in window_size)
+    # Frame the valid ground only: hidden nodata points keep their place in the grid.
+    pts = np.asarray(surface.points)[np.isfinite(surface.point_data["elevation"])]
+    bounds = np.column_stack([pts.min(axis=0), pts.max(axis=0)]).ravel()
     camera = terrain_birdseye_camera(
-        surface.bounds,
+        tuple(float(v) for v in bounds),
         azimuth=view_azimuth,
         elevation=elevation_angle,
         view_angle=view_angle,
@@ -136,6 +139,7 @@ def birdseye_layers(
     *,
     interval: float | None = None,
     major_interval: float | None = None,
+    contours: bool = True,
     width: float = 1.0,
     major_width: float = 2.0,
     dense_spacing: float = 4.0,
@@ -169,14 +173,16 @@ def birdseye_layers(
         interval, major_interval = minor, major
     elif interval is None:
         interval = float(major_interval) / 5.0
-    cn = contour_lines(
-        elev,
-        interval=interval,
-        major_interval=major_interval,
-        width=width * k,
-        major_width=major_width * k,
-        dense_spacing=dense_spacing * k,
-    )
+    cn = np.zeros_like(elev)
+    if contours:
+        cn = contour_lines(
+            elev,
+            interval=interval,
+            major_interval=major_interval,
+            width=width * k,
+            major_width=major_width * k,
+            dense_spacing=dense_spacing * k,
+        )
     sh = lambert(gb.world_normal(), light=_sun(azimuth, altitude), mask=valid)
     opts = _check_bands(bands, major_interval if major_interval is not None else 5 * interval)
     if opts is None:

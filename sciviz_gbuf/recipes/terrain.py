@@ -15,21 +15,20 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Sequence
-from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
 from .._progress import progress
 from ..errors import InputError
-from ..filters import color_bands, contour_lines, hillshade
+from ..filters import _band_kernels as _bk
+from ..filters import contour_lines, hillshade
+from ..filters.bands import band_tables
 from ..readers import DEM, read_dem
 
 __all__ = ["as_dem", "map_layers", "nice_intervals", "topographic_map"]
 
 #: Dark brown, the colour of contour lines on most topographic maps.
 CONTOUR_COLOR = (0.36, 0.20, 0.08)
-# Rows composited per task: bounds the float32 temporaries of a 8192-wide map to ~100 MB.
-_BLOCK_ROWS = 512
 
 
 def as_dem(dem: DEM | str | os.PathLike | np.ndarray) -> DEM:
@@ -39,8 +38,9 @@ def as_dem(dem: DEM | str | os.PathLike | np.ndarray) -> DEM:
 
 
 def nice_intervals(lo: float, hi: float, *, majors: int = 8) -> tuple[float, float]:
-    """Minor and major contour intervals for heights in ``[lo, hi]``: about ``majors`` major
-    lines, at a round interval (1, 2, 2.5 or 5 times a power of ten), and five minors to each.
+    """Minor and major contour intervals for heights in ``[lo, hi]``: the round major interval
+    (1, 2, 2.5 or 5 times a power of ten) giving closest to ``majors`` lines (in ratio), and
+    five minors to each major.
 
     >>> nice_intervals(250.0, 1150.0)
     (20.0, 100.0)
@@ -48,9 +48,9 @@ def nice_intervals(lo: float, hi: float, *, majors: int = 8) -> tuple[float, flo
     span = float(hi) - float(lo)
     if not (math.isfinite(span) and span > 0):
         return 0.2, 1.0
-    raw = span / majors
-    unit = 10.0 ** math.floor(math.log10(raw))
-    major = next(m * unit for m in (1.0, 2.0, 2.5, 5.0, 10.0) if m * unit >= raw * 0.999)
+    e = math.floor(math.log10(span / majors))
+    candidates = [m * 10.0**k for k in (e - 1, e, e + 1) for m in (1.0, 2.0, 2.5, 5.0)]
+    major = min(candidates, key=lambda c: abs(math.log(span / c / majors)))
     return major / 5.0, major
 
 
@@ -193,85 +193,58 @@ def map_layers(
         )
     if bar is not None:
         bar.step("relief")
-    layers["light"] = None
+    layers["relief"] = relief
     if relief:
         opts = {"azimuth": azimuth, "altitude": altitude, "z_factor": z_factor, "variant": variant}
-        sh = hillshade(_fill_ring(z), dx=dx, dy=dy, **opts)
-        flat = _flat_shade(dx=dx, dy=dy, **opts)
-        direct = sh / np.float32(max(flat, 1e-3))
+        layers["sh"] = hillshade(_fill_ring(z), dx=dx, dy=dy, **opts)
+        layers["flat"] = max(_flat_shade(dx=dx, dy=dy, **opts), 1e-3)
         if shadows:
             from ..filters import cast_shadows
 
-            direct *= cast_shadows(
+            layers["lit"] = cast_shadows(
                 z, dx=dx, dy=dy, azimuth=azimuth, altitude=altitude, z_factor=z_factor
             )
-        ambient = np.float32(1.0)
         if sky_view:
             from ..filters import sky_view as sky_view_factor
 
-            ambient = sky_view_factor(z, dx=dx, dy=dy, z_factor=z_factor)
-        light = relief_light(direct, ambient)
-        light[~valid] = np.nan
-        layers["light"] = light.astype(np.float32, copy=False)
+            layers["sky"] = sky_view_factor(z, dx=dx, dy=dy, z_factor=z_factor)
     band_interval = major_interval if major_interval is not None else 5.0 * float(interval)
     layers["bands"] = _check_bands(bands, band_interval)
     layers["cmap"], layers["sea_level"] = cmap, sea_level
     return layers
 
 
-def _composite_block(
-    z: np.ndarray,
-    light: np.ndarray | None,
-    ink: np.ndarray | None,
-    layers: dict,
-    colour: np.ndarray,
-) -> np.ndarray:
-    """RGBA uint8 of one block of rows: bands x relief, then ink over it."""
-    valid = np.isfinite(z)
-    opts = layers["bands"]
-    if opts is None:
-        rgb = np.ones((*z.shape, 3), dtype=np.float32)
-    else:
-        rgba = color_bands(
-            z,
-            cmap=layers["cmap"],
-            sea_level=layers["sea_level"],
-            vmin=layers["lo"],
-            vmax=layers["hi"],
-            **opts,
-        )
-        rgb = rgba[..., :3]
-    if light is not None:
-        rgb = lit(rgb, light)
-    if ink is not None:
-        a = ink[..., None]
-        rgb = rgb * (1.0 - a) + colour * a
-    out = np.empty((*z.shape, 4), dtype=np.uint8)
-    out[..., :3] = np.rint(np.clip(rgb, 0.0, 1.0) * 255.0)
-    out[..., 3] = np.where(valid, 255, 0)
-    out[~valid, :3] = 0
-    return out
-
-
 def composite(layers: dict, heights: np.ndarray, colour: np.ndarray) -> np.ndarray:
-    """All layers into one RGBA uint8 image, in blocks of rows on two threads (numpy releases
-    the GIL), so that the float temporaries stay small for maps of any size."""
-    h = heights.shape[0]
-    out = np.empty((*heights.shape, 4), dtype=np.uint8)
-
-    def block(r0: int) -> None:
-        r1 = min(r0 + _BLOCK_ROWS, h)
-        sl = slice(r0, r1)
-        light = None if layers["light"] is None else layers["light"][sl]
-        ink = None if layers["ink"] is None else layers["ink"][sl]
-        out[sl] = _composite_block(heights[sl], light, ink, layers, colour)
-
-    starts = range(0, h, _BLOCK_ROWS)
-    if h <= _BLOCK_ROWS:
-        block(0)
-    else:
-        with ThreadPoolExecutor(max_workers=min(4, os.cpu_count() or 1)) as pool:
-            list(pool.map(block, starts))
+    """The map's layers into one RGBA uint8 image in one fused pass (no float image of the
+    whole map is made)."""
+    z = np.ascontiguousarray(heights, dtype=np.float32)
+    opts = layers["bands"]
+    tables = band_tables(
+        np.zeros(1, np.float32),  # unused: the range is known
+        interval=(opts or {}).get("interval"),
+        levels=(opts or {}).get("levels"),
+        base=0.0,
+        cmap=layers["cmap"],
+        vmin=layers["lo"],
+        vmax=layers["hi"],
+        sea_level=layers["sea_level"],
+        sea_cmap=None,
+    )
+    empty = np.zeros((0, 0), np.float32)
+    out = np.empty((*z.shape, 4), dtype=np.uint8)
+    _bk.map_image(
+        z,
+        opts is not None,
+        *tables,
+        bool(layers["relief"]),
+        layers.get("sh", empty),
+        np.float32(layers.get("flat", 1.0)),
+        layers.get("lit", empty),
+        layers.get("sky", empty),
+        empty if layers["ink"] is None else layers["ink"],
+        colour.astype(np.float32),
+        out,
+    )
     return out
 
 

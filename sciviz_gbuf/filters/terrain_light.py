@@ -1,0 +1,459 @@
+"""Terrain lighting beyond ``gdaldem``: cast shadows and sky-view factor of a height grid.
+
+The counterparts of R rayshader's ``ray_shade`` and ``ambient_shade`` for plan-view DEMs, with the
+conventions of :func:`~sciviz_gbuf.filters.hillshade.hillshade` (row 0 = north, column 0 = west,
+azimuth clockwise from north, NaN = nodata). Both march rays over the grid with one shared
+scheme: a step of exactly one pixel along the ray's dominant axis, the height linearly
+interpolated between the two cells that straddle the ray along the other axis. Along the axes
+and the pixel diagonals (with ``dx == dy``) every sample falls on a cell centre.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+from scipy import ndimage
+
+from ..errors import InputError
+
+__all__ = ["cast_shadows", "sky_view"]
+
+_SNAP = 1e-12  # sin/cos of multiples of 90 degrees are off by ~1e-16: snap them to 0 or +-1
+
+
+@njit(cache=True, inline="always")
+def _horizon_tan(
+    z: np.ndarray,
+    i: int,
+    j: int,
+    d_row: float,
+    d_col: float,
+    step_len: float,
+    row_ub: np.ndarray,
+    rw: int,
+    col_ub: np.ndarray,
+    cw: int,
+    cell_ub: float,
+    floor_tan: float,
+    stop_tan: float,
+    max_steps: int,
+) -> float:
+    """Largest ``(height - z[i, j]) / distance`` over the samples of a ray, at least ``floor_tan``.
+
+    The ray starts at cell (i, j) and moves ``(d_row, d_col)`` cells per step (one of them is
+    +-1), ``step_len`` metres per step. It stops at the grid edge, after ``max_steps`` steps, as
+    soon as the result reaches ``stop_tan`` or when no cell ahead could raise it: ``row_ub[rw, r]``
+    and ``col_ub[cw, c]`` bound the heights of all rows / columns from r / c onwards in the ray's
+    direction (see :func:`_bounds`), ``cell_ub`` bounds all the ray's samples. (Rows of 2-D
+    arrays rather than 1-D slices: a slice per ray costs atomic reference counting, which
+    threads contend for.) Samples that touch a NaN cell are
+    skipped: nodata never blocks.
+    """
+    h, w = z.shape
+    z0 = np.float64(z[i, j])
+    best = floor_tan
+    # the number of steps inside the grid, up front: no bounds checks in the loop. The 1e-9 and
+    # the clamps below absorb rounding of positions that land exactly on the last row/column.
+    if abs(d_row) == 1.0:
+        di = int(d_row)
+        n_in = h - 1 - i if di > 0 else i
+        if d_col > 0.0:
+            n_in = min(n_in, int((w - 1 - j) / d_col + 1e-9))
+        elif d_col < 0.0:
+            n_in = min(n_in, int(j / -d_col + 1e-9))
+        for k in range(1, min(n_in, max_steps) + 1):
+            dist = k * step_len
+            r = i + k * di
+            pos = j + k * d_col
+            c0 = min(int(pos), w - 1)  # pos >= -1e-9: truncation is floor (or 0)
+            f = pos - c0
+            # all later samples are at most this high: once the ray clears it, nothing can block
+            if min(row_ub[rw, r], col_ub[cw, c0], cell_ub) - z0 <= best * dist:
+                break
+            a = z[r, c0]
+            v = a + f * (z[r, c0 + 1] - a) if f > 0.0 else a
+            rise = v - z0  # NaN (nodata) compares False: not blocking
+            if rise > best * dist:
+                best = rise / dist
+                if best >= stop_tan:
+                    break
+    else:
+        dj = int(d_col)
+        n_in = w - 1 - j if dj > 0 else j
+        if d_row > 0.0:
+            n_in = min(n_in, int((h - 1 - i) / d_row + 1e-9))
+        elif d_row < 0.0:
+            n_in = min(n_in, int(i / -d_row + 1e-9))
+        for k in range(1, min(n_in, max_steps) + 1):
+            dist = k * step_len
+            c = j + k * dj
+            pos = i + k * d_row
+            r0 = min(int(pos), h - 1)
+            f = pos - r0
+            if min(row_ub[rw, r0], col_ub[cw, c], cell_ub) - z0 <= best * dist:
+                break
+            a = z[r0, c]
+            v = a + f * (z[r0 + 1, c] - a) if f > 0.0 else a
+            rise = v - z0
+            if rise > best * dist:
+                best = rise / dist
+                if best >= stop_tan:
+                    break
+    return best
+
+
+@njit(cache=True)
+def _line_max(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Largest height of every row and every column (-inf where all nodata)."""
+    h, w = z.shape
+    rows = np.full(h, -np.inf)
+    cols = np.full(w, -np.inf)
+    for i in range(h):
+        for j in range(w):
+            v = z[i, j]
+            if v > rows[i]:  # NaN compares False
+                rows[i] = v
+            if v > cols[j]:
+                cols[j] = v
+    return rows, cols
+
+
+def _bounds(line: np.ndarray) -> np.ndarray:
+    """(3, n) upper bounds of the heights a ray meets from line k on: moving to higher indices,
+    to lower indices (interpolation also reads k + 1), and not moving along this axis."""
+    up = np.maximum.accumulate(line[::-1])[::-1]
+    down = np.maximum.accumulate(line)
+    down = np.concatenate([down[1:], down[-1:]])
+    return np.stack([up, down, line])
+
+
+def _local_max(z: np.ndarray, radius: float, dx: float, dy: float) -> np.ndarray:
+    """Highest cell within ``radius`` metres of each cell (a box, plus the interpolation
+    neighbour): where the rays' march is limited, a far tighter bound than the row/column maxima
+    on rough terrain."""
+    h, w = z.shape
+    half_r = min(math.ceil(radius / dy) + 1, h)
+    half_c = min(math.ceil(radius / dx) + 1, w)
+    filled = np.where(np.isnan(z), np.float32(-np.inf), z)
+    return ndimage.maximum_filter(
+        filled, size=(2 * half_r + 1, 2 * half_c + 1), mode="constant", cval=-np.inf
+    )
+
+
+def _which(step: float) -> int:
+    return 0 if step > 0.0 else (1 if step < 0.0 else 2)
+
+
+@njit(parallel=True, cache=True)
+def _shadow_kernel(
+    z: np.ndarray,
+    d_row: float,
+    d_col: float,
+    step_len: float,
+    row_ub: np.ndarray,
+    rw: int,
+    col_ub: np.ndarray,
+    cw: int,
+    altitude: float,
+    sun_radius: float,
+) -> np.ndarray:
+    h, w = z.shape
+    out = np.full((h, w), np.nan, dtype=np.float32)
+    floor_tan = math.tan(math.radians(altitude - sun_radius))
+    stop_tan = math.tan(math.radians(altitude + sun_radius)) if sun_radius > 0.0 else floor_tan
+    alt = math.radians(altitude)
+    rad = math.radians(sun_radius)
+    max_steps = h + w
+    for i in prange(h):
+        for j in range(w):
+            if np.isnan(z[i, j]):
+                continue
+            t = _horizon_tan(
+                z,
+                i,
+                j,
+                d_row,
+                d_col,
+                step_len,
+                row_ub,
+                rw,
+                col_ub,
+                cw,
+                np.inf,
+                floor_tan,
+                stop_tan,
+                max_steps,
+            )
+            if sun_radius == 0.0:
+                out[i, j] = 1.0 if t <= floor_tan else 0.0
+            else:
+                # share of the sun disc above a straight horizon at elevation atan(t)
+                s = min(max((math.atan(t) - alt) / rad, -1.0), 1.0)
+                out[i, j] = (math.acos(s) - s * math.sqrt(1.0 - s * s)) / math.pi
+    return out
+
+
+@njit(parallel=True, cache=True)
+def _sky_view_kernel(
+    z: np.ndarray,
+    d_rows: np.ndarray,
+    d_cols: np.ndarray,
+    step_lens: np.ndarray,
+    row_ubs: np.ndarray,
+    col_ubs: np.ndarray,
+    row_which: np.ndarray,
+    col_which: np.ndarray,
+    local_ub: np.ndarray,
+    radius: float,
+) -> np.ndarray:
+    h, w = z.shape
+    out = np.full((h, w), np.nan, dtype=np.float32)
+    n = d_rows.shape[0]
+    max_steps = np.empty(n, dtype=np.int64)
+    for d in range(n):
+        max_steps[d] = min(math.floor(radius / step_lens[d] * (1.0 + 1e-12)), h + w)
+    for i in prange(h):
+        for j in range(w):
+            if np.isnan(z[i, j]):
+                continue
+            acc = 0.0
+            for d in range(n):
+                t = _horizon_tan(
+                    z,
+                    i,
+                    j,
+                    d_rows[d],
+                    d_cols[d],
+                    step_lens[d],
+                    row_ubs,
+                    row_which[d],
+                    col_ubs,
+                    col_which[d],
+                    local_ub[i, j],
+                    0.0,
+                    np.inf,
+                    max_steps[d],
+                )
+                acc += t / math.sqrt(1.0 + t * t)  # sin(atan(t)), t >= 0
+            out[i, j] = 1.0 - acc / n
+    return out
+
+
+def _snap(v: float) -> float:
+    if abs(v) < _SNAP:
+        return 0.0
+    if abs(abs(v) - 1.0) < _SNAP:
+        return math.copysign(1.0, v)
+    return v
+
+
+def _ray_steps(azimuth: float, dx: float, dy: float) -> tuple[float, float, float]:
+    """(rows, columns, metres) per step of a ray towards ``azimuth`` (degrees clockwise from north),
+    one pixel along its dominant axis."""
+    az = math.radians(azimuth)
+    per_m_col = _snap(math.sin(az)) / dx  # east is +column
+    per_m_row = -_snap(math.cos(az)) / dy  # north is -row
+    m = max(abs(per_m_col), abs(per_m_row))
+    return _snap(per_m_row / m), _snap(per_m_col / m), 1.0 / m
+
+
+def _prepare(
+    heights: np.ndarray, dx: float, dy: float, z_factor: float, mask: np.ndarray | None
+) -> np.ndarray:
+    """Checked float32 copy of ``heights * z_factor`` with NaN at nodata (inputs untouched)."""
+    z = np.asarray(heights)
+    if z.ndim != 2:
+        raise InputError(f"heights: expected a 2-D (H, W) array, got shape {z.shape}")
+    if not np.issubdtype(z.dtype, np.number) or np.issubdtype(z.dtype, np.complexfloating):
+        raise InputError(f"heights: expected real numbers, got dtype {z.dtype}")
+    for name, value in (("dx", dx), ("dy", dy)):
+        if not (math.isfinite(float(value)) and float(value) > 0.0):
+            raise InputError(f"{name}: expected a finite cell size > 0, got {value!r}")
+    if not math.isfinite(float(z_factor)):
+        raise InputError(f"z_factor: expected a finite number, got {z_factor!r}")
+    z32 = z.astype(np.float32)  # always a copy: the input is never modified
+    z32[~np.isfinite(z32)] = np.nan
+    if mask is not None:
+        m = np.asarray(mask, dtype=bool)
+        if m.shape != z.shape:
+            raise InputError(f"mask: expected shape {z.shape}, got {m.shape}")
+        z32[~m] = np.nan
+    if float(z_factor) != 1.0:
+        z32 *= np.float32(z_factor)
+    return z32
+
+
+def cast_shadows(
+    heights: np.ndarray,
+    *,
+    dx: float = 1.0,
+    dy: float = 1.0,
+    azimuth: float = 315.0,
+    altitude: float = 45.0,
+    z_factor: float = 1.0,
+    sun_radius: float = 0.0,
+    mask: np.ndarray | None = None,
+) -> np.ndarray:
+    """Shadows cast by the terrain on itself under a directional sun (rayshader's ``ray_shade``).
+
+    From every cell a ray is marched towards the sun, one pixel per step along its dominant axis
+    with the terrain linearly interpolated across the other axis; the cell is in shadow if a
+    sample rises above the ray. The march stops at the grid edge (beyond it nothing blocks) or
+    once the ray is above every cell it could still meet (row, column maxima ahead).
+
+    Parameters
+    ----------
+    heights : (H, W) array
+        Heights; row 0 is the north edge, column 0 the west edge. NaN and +-inf are nodata.
+    dx, dy : float > 0, default: 1
+        Cell size east-west and north-south, in the units of the heights (metres).
+    azimuth : float, default: 315
+        Direction the light comes from, degrees clockwise from north.
+    altitude : float in (0, 90], default: 45
+        Elevation of the sun's centre above the horizon, degrees; 90 casts no shadows.
+    z_factor : float, default: 1
+        Vertical exaggeration; shadow lengths scale with it.
+    sun_radius : float, default: 0
+        Angular radius of the sun disc, degrees, in ``[0, min(altitude, 90 - altitude)]``. 0 gives
+        hard shadows (0 or 1). Otherwise the result is the share of the disc above the terrain
+        horizon in the sun's azimuth, a penumbra that widens with distance from the occluder (the
+        true sun is ~0.27 degrees). The horizon is taken as straight across the disc.
+    mask : (H, W) bool, optional
+        False marks nodata cells, like NaN heights.
+
+    Returns
+    -------
+    (H, W) float32 in [0, 1]
+        1 = lit, 0 = in shadow; NaN at nodata. Nodata cells never block the sun.
+
+    Notes
+    -----
+    "Shadow" means the sun is hidden by terrain along the ray, whichever terrain that is. So a
+    slope facing away from the sun and steeper than its altitude is shadowed by its own upslope
+    cells (as in rayshader), except for the cells at the grid edge towards the sun, which have no
+    terrain beyond them. A discrete grid cannot tell such self-shadow from a cast shadow on curved
+    ground; multiply with :func:`~sciviz_gbuf.filters.hillshade.hillshade`, which is 0 on those
+    slopes anyway. Cost is about (shadow length in pixels) per cell: low suns are slower.
+
+    Raises
+    ------
+    InputError
+        ``heights`` not 2-D or ``mask`` of another shape; ``dx``/``dy`` not finite and positive;
+        ``altitude`` outside (0, 90]; non-finite ``azimuth``/``z_factor``; ``sun_radius`` out of
+        range.
+    """
+    for name, value in (("azimuth", azimuth), ("altitude", altitude), ("sun_radius", sun_radius)):
+        if not math.isfinite(float(value)):
+            raise InputError(f"{name}: expected a finite number, got {value!r}")
+    if not 0.0 < float(altitude) <= 90.0:
+        raise InputError(f"altitude: expected degrees in (0, 90], got {altitude!r}")
+    limit = min(float(altitude), 90.0 - float(altitude))
+    if not 0.0 <= float(sun_radius) <= limit:
+        raise InputError(
+            f"sun_radius: expected degrees in [0, {limit:g}] (disc between horizon and zenith), "
+            f"got {sun_radius!r}"
+        )
+    z = _prepare(heights, dx, dy, z_factor, mask)
+    if float(altitude) == 90.0 or z.size == 0:
+        return np.where(np.isnan(z), np.float32(np.nan), np.float32(1.0))
+    d_row, d_col, step_len = _ray_steps(float(azimuth), float(dx), float(dy))
+    rows, cols = _line_max(z)
+    return _shadow_kernel(
+        z,
+        d_row,
+        d_col,
+        step_len,
+        _bounds(rows),
+        _which(d_row),
+        _bounds(cols),
+        _which(d_col),
+        float(altitude),
+        float(sun_radius),
+    )
+
+
+def sky_view(
+    heights: np.ndarray,
+    *,
+    dx: float = 1.0,
+    dy: float = 1.0,
+    directions: int = 16,
+    radius: float | None = None,
+    z_factor: float = 1.0,
+    mask: np.ndarray | None = None,
+) -> np.ndarray:
+    """Sky-view factor: the share of the sky hemisphere a cell sees (rayshader's
+    ``ambient_shade``, Zakšek et al. 2011).
+
+    ``SVF = 1 - mean_d sin(max(0, horizon_d))`` over ``directions`` azimuths ``360 k / n``
+    (k = 0..n-1, from north clockwise), where ``horizon_d`` is the largest elevation angle of the
+    terrain seen from the cell within ``radius`` in direction d. Rays are marched as in
+    :func:`cast_shadows`.
+
+    Parameters
+    ----------
+    heights : (H, W) array
+        Heights; row 0 is the north edge, column 0 the west edge. NaN and +-inf are nodata.
+    dx, dy : float > 0, default: 1
+        Cell size east-west and north-south, in the units of the heights (metres).
+    directions : int >= 1, default: 16
+        Number of horizon directions.
+    radius : float > 0, optional
+        Search distance in metres. Default: ``50 * max(dx, dy)``. Larger is more faithful in
+        broad valleys and slower; the march also stops where no cell could raise the horizon.
+    z_factor : float, default: 1
+        Vertical exaggeration.
+    mask : (H, W) bool, optional
+        False marks nodata cells, like NaN heights.
+
+    Returns
+    -------
+    (H, W) float32 in [0, 1]
+        1 on open flat ground, peaks and ridges; less in valleys and pits. NaN at nodata; nodata
+        cells never block the sky. Beyond the grid edge nothing blocks, so cells near the edge
+        see more sky than they would in a larger DEM.
+
+    Raises
+    ------
+    InputError
+        ``heights`` not 2-D or ``mask`` of another shape; ``dx``/``dy``/``radius`` not finite and
+        positive; ``directions`` not an integer >= 1; non-finite ``z_factor``.
+
+    References
+    ----------
+    .. [1] Zakšek, K., Oštir, K. & Kokalj, Ž. (2011). Sky-view factor as a relief visualization
+       technique. Remote Sensing 3(2), 398-415.
+    .. [2] Morgan-Wall, T. rayshader: ``ambient_shade``. https://www.rayshader.com
+    """
+    if isinstance(directions, bool) or not isinstance(directions, (int, np.integer)):
+        raise InputError(f"directions: expected an integer >= 1, got {directions!r}")
+    if int(directions) < 1:
+        raise InputError(f"directions: expected an integer >= 1, got {directions!r}")
+    z = _prepare(heights, dx, dy, z_factor, mask)
+    if radius is None:
+        radius = 50.0 * max(float(dx), float(dy))
+    if not (math.isfinite(float(radius)) and float(radius) > 0.0):
+        raise InputError(f"radius: expected a finite distance > 0 (metres), got {radius!r}")
+    if z.size == 0:
+        return z
+    steps = [
+        _ray_steps(360.0 * k / int(directions), float(dx), float(dy)) for k in range(directions)
+    ]
+    d_rows, d_cols, step_lens = (np.array(s, dtype=np.float64) for s in zip(*steps, strict=True))
+    rows, cols = _line_max(z)
+    row_which = np.array([_which(v) for v in d_rows], dtype=np.int64)
+    col_which = np.array([_which(v) for v in d_cols], dtype=np.int64)
+    return _sky_view_kernel(
+        z,
+        d_rows,
+        d_cols,
+        step_lens,
+        _bounds(rows),
+        _bounds(cols),
+        row_which,
+        col_which,
+        _local_max(z, float(radius), float(dx), float(dy)),
+        float(radius),
+    )

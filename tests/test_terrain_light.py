@@ -1,0 +1,407 @@
+"""Cast shadows and sky-view factor: analytic walls, pillars, planes, valleys and pits, and an
+independent brute-force numpy ray march."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+
+from sciviz_gbuf.errors import InputError
+from sciviz_gbuf.filters.terrain_light import cast_shadows, sky_view
+
+# ---------------------------------------------------------------------------------------------
+# independent reference: march every cell at once with numpy, no early exits
+
+
+def ray_step(azimuth, dx, dy):
+    """(rows, cols, metres) per step towards ``azimuth``: one pixel along the dominant axis."""
+    east, north = np.sin(np.radians(azimuth)), np.cos(np.radians(azimuth))
+    east = 0.0 if abs(east) < 1e-9 else east
+    north = 0.0 if abs(north) < 1e-9 else north
+    cols, rows = east / dx, -north / dy  # pixels per metre
+    m = max(abs(cols), abs(rows))
+    r, c = rows / m, cols / m
+    r = float(np.round(r)) if abs(abs(r) - 1) < 1e-9 else r
+    c = float(np.round(c)) if abs(abs(c) - 1) < 1e-9 else c
+    return r, c, 1.0 / m
+
+
+def reference_horizon(z, azimuth, dx, dy, max_dist=np.inf):
+    """Largest (height - own height) / distance along each cell's ray (-inf if no sample)."""
+    z = z.astype(np.float64)
+    h, w = z.shape
+    dr, dc, step = ray_step(azimuth, dx, dy)
+    ii, jj = np.mgrid[0:h, 0:w]
+    best = np.full((h, w), -np.inf)
+    alive = np.ones((h, w), bool)
+    k = 1
+    while alive.any() and k <= h + w and k * step <= max_dist * (1 + 1e-12):
+        r, c = ii + k * dr, jj + k * dc
+        r0, c0 = np.floor(r).astype(int), np.floor(c).astype(int)
+        fr, fc = r - r0, c - c0
+        inside = (r0 >= 0) & (r0 < h) & (c0 >= 0) & (c0 < w)
+        inside &= ((fr == 0) | (r0 + 1 < h)) & ((fc == 0) | (c0 + 1 < w))
+        alive &= inside  # once outside, the ray never comes back
+        r0c, c0c = np.clip(r0, 0, h - 1), np.clip(c0, 0, w - 1)
+        r1c, c1c = np.clip(r0 + 1, 0, h - 1), np.clip(c0 + 1, 0, w - 1)
+        a = z[r0c, c0c]
+        b = np.where(fr > 0, z[r1c, c0c], np.where(fc > 0, z[r0c, c1c], a))
+        f = np.where(fr > 0, fr, fc)
+        v = np.where(f > 0, a + f * (b - a), a)
+        t = (v - z) / (k * step)
+        t = np.where(alive & np.isfinite(t), t, -np.inf)
+        best = np.maximum(best, t)
+        k += 1
+    return best
+
+
+def reference_shadows(z, azimuth, altitude, dx, dy):
+    lit = reference_horizon(z, azimuth, dx, dy) <= np.tan(np.radians(altitude))
+    return np.where(np.isnan(z), np.nan, lit.astype(np.float64))
+
+
+def reference_sky_view(z, directions, radius, dx, dy):
+    acc = np.zeros(z.shape)
+    for k in range(directions):
+        t = np.maximum(reference_horizon(z, 360.0 * k / directions, dx, dy, radius), 0.0)
+        acc += np.sin(np.arctan(t))
+    return np.where(np.isnan(z), np.nan, 1.0 - acc / directions)
+
+
+def rough_terrain(shape, seed):
+    rng = np.random.default_rng(seed)
+    z = rng.normal(size=shape).cumsum(0).cumsum(1) * 0.3 + rng.normal(size=shape) * 2.0
+    return z.astype(np.float32)
+
+
+# ---------------------------------------------------------------------------------------------
+# cast_shadows
+
+
+@pytest.mark.parametrize("altitude", [0.5, 10.0, 45.0, 89.0, 90.0])
+@pytest.mark.parametrize("azimuth", [0.0, 37.0, 135.0, 270.0])
+def test_flat_plane_is_lit(altitude, azimuth):
+    z = np.full((20, 30), 7.5, dtype=np.float32)
+    np.testing.assert_array_equal(cast_shadows(z, azimuth=azimuth, altitude=altitude), 1.0)
+
+
+def wall_scene(azimuth, height, dx, dy, n=160):
+    """Flat ground with a wall across the middle, perpendicular to a cardinal sun."""
+    z = np.zeros((n, n))
+    mid = n // 2
+    if azimuth in (0.0, 180.0):
+        z[mid, :] = height
+    else:
+        z[:, mid] = height
+    return z, mid
+
+
+def shadow_run(shade, azimuth, mid):
+    """Shadowed cells behind the wall (away from the sun) and in front of it, along the centre
+    line through the wall."""
+    line = shade[:, 5] if azimuth in (0.0, 180.0) else shade[5, :]
+    # the sun in the north (0) or east (90) shadows higher rows / lower columns respectively
+    away_is_higher = azimuth in (0.0, 270.0)
+    behind = line[mid + 1 :] if away_is_higher else line[:mid][::-1]
+    front = line[:mid] if away_is_higher else line[mid + 1 :]
+    run = int(np.argmax(behind > 0.5)) if (behind > 0.5).any() else behind.size
+    return run, int((behind[run:] < 0.5).sum()), int((front < 0.5).sum())
+
+
+@pytest.mark.parametrize("azimuth", [0.0, 90.0, 180.0, 270.0])
+@pytest.mark.parametrize("altitude", [20.0, 30.0, 45.0, 60.0])
+@pytest.mark.parametrize(("dx", "dy"), [(1.0, 1.0), (2.0, 0.5)])
+def test_wall_shadow_length(azimuth, altitude, dx, dy):
+    height = 12.0
+    z, mid = wall_scene(azimuth, height, dx, dy)
+    shade = cast_shadows(z, dx=dx, dy=dy, azimuth=azimuth, altitude=altitude)
+    cell = dy if azimuth in (0.0, 180.0) else dx
+    expected = height / math.tan(math.radians(altitude)) / cell  # pixels
+    run, stray_behind, stray_front = shadow_run(shade, azimuth, mid)
+    assert abs(run - expected) <= 1.0
+    assert stray_behind == 0  # one contiguous shadow, then lit ground
+    assert stray_front == 0  # nothing is shadowed on the sun's side
+    assert shade[mid if azimuth in (0.0, 180.0) else 5, 5 if azimuth in (0.0, 180.0) else mid] == 1
+
+
+@pytest.mark.parametrize("z_factor", [0.5, 2.0, 3.0])
+def test_z_factor_scales_shadow_length(z_factor):
+    z, mid = wall_scene(270.0, 6.0, 1.0, 1.0)
+    shade = cast_shadows(z, azimuth=270.0, altitude=30.0, z_factor=z_factor)
+    run, _, _ = shadow_run(shade, 270.0, mid)
+    assert abs(run - z_factor * 6.0 / math.tan(math.radians(30.0))) <= 1.0
+    z2 = z * z_factor
+    np.testing.assert_array_equal(shade, cast_shadows(z2, azimuth=270.0, altitude=30.0))
+
+
+@pytest.mark.parametrize("azimuth", [0.0, 45.0, 90.0, 135.0, 200.0, 270.0, 315.0])
+@pytest.mark.parametrize(("dx", "dy"), [(1.0, 1.0), (1.0, 2.0)])
+def test_pillar_shadow_points_away_from_sun(azimuth, dx, dy):
+    n, height, altitude = 61, 10.0, 35.0
+    z = np.zeros((n, n))
+    c = n // 2
+    z[c, c] = height
+    shade = cast_shadows(z, dx=dx, dy=dy, azimuth=azimuth, altitude=altitude)
+    rows, cols = np.nonzero(shade < 0.5)
+    assert rows.size > 0
+    east, north = (cols - c) * dx, -(rows - c) * dy
+    az = math.radians(azimuth)
+    along = -(east * math.sin(az) + north * math.cos(az))  # distance away from the sun
+    across = east * math.cos(az) - north * math.sin(az)
+    assert (along > 0).all()
+    assert np.abs(across).max() <= max(dx, dy)  # a thin streak along azimuth + 180
+    length = height / math.tan(math.radians(altitude))
+    tol = max(dx, dy) * math.sqrt(2)
+    if azimuth % 90 == 0 or (dx == dy and azimuth % 45 == 0):
+        # rays through cell centres see the pillar's full height: the exact length
+        assert abs(along.max() - length) <= tol
+    else:
+        # between centres the one-cell pillar is blended with its neighbours: never longer
+        assert along.max() <= length + tol
+    assert shade[c, c] == 1.0
+
+
+@pytest.mark.parametrize("azimuth", [20.0, 123.0, 200.0, 300.0])
+def test_block_shadow_length_off_axis(azimuth):
+    """A 5x5 block is wide enough that off-axis rays meet its full height."""
+    n, height, altitude = 81, 10.0, 30.0
+    z = np.zeros((n, n))
+    c = n // 2
+    z[c - 2 : c + 3, c - 2 : c + 3] = height
+    shade = cast_shadows(z, azimuth=azimuth, altitude=altitude)
+    rows, cols = np.nonzero(shade < 0.5)
+    az = math.radians(azimuth)
+    east, north = cols - c, -(rows - c)
+    along = -(east * math.sin(az) + north * math.cos(az))
+    across = east * math.cos(az) - north * math.sin(az)
+    assert (along > -3).all() and np.abs(across).max() <= 2 * math.sqrt(2) + 1
+    # the far end: the block's corner/edge (2 to 2.8 px from the centre) plus the shadow length
+    reach = along.max() - height / math.tan(math.radians(altitude))
+    assert 1.0 <= reach <= 2 * math.sqrt(2) + 1
+
+
+@pytest.mark.parametrize("azimuth", [90.0, 270.0])
+def test_tilted_plane_self_shadow_is_documented(azimuth):
+    """Slopes facing away from a sun lower than the slope are shadowed by their own upslope
+    (as documented), except the edge line towards the sun; gentler or sun-facing slopes are lit."""
+    cols = np.arange(40.0)
+    down_to_east = np.tile(-cols, (10, 1))  # slope 45 degrees, facing east
+    sun_west = azimuth == 270.0
+    steep = cast_shadows(down_to_east, azimuth=azimuth, altitude=30.0)
+    if sun_west:  # facing away from a 30 degree sun: shadowed but for the west edge column
+        np.testing.assert_array_equal(steep[:, 0], 1.0)
+        np.testing.assert_array_equal(steep[:, 1:], 0.0)
+        np.testing.assert_array_equal(cast_shadows(down_to_east, azimuth=270, altitude=50), 1)
+    else:  # facing the sun
+        np.testing.assert_array_equal(steep, 1.0)
+
+
+def test_nodata_does_not_cast_and_stays_nan():
+    z, mid = wall_scene(270.0, 10.0, 1.0, 1.0, n=40)
+    z[:, mid] = np.nan
+    z[3, 3] = np.inf
+    before = z.copy()
+    shade = cast_shadows(z, azimuth=270.0, altitude=30.0)
+    np.testing.assert_array_equal(z, before)  # input not modified
+    assert np.isnan(shade[:, mid]).all() and np.isnan(shade[3, 3])
+    assert np.isnan(shade).sum() == 41
+    np.testing.assert_array_equal(shade[~np.isnan(shade)], 1.0)
+    mask = np.ones(z.shape, bool)
+    mask[7, 9] = False
+    assert np.isnan(cast_shadows(z, mask=mask)[7, 9])
+
+
+def test_matches_rowwise_numpy_for_west_sun():
+    z = rough_terrain((50, 70), 1)
+    tan = math.tan(math.radians(25.0))
+    blocked = np.zeros(z.shape, bool)
+    for s in range(1, z.shape[1]):  # terrain s columns west higher than the ray at s metres
+        blocked[:, s:] |= z[:, :-s].astype(np.float64) - z[:, s:] > s * tan
+    np.testing.assert_array_equal(cast_shadows(z, azimuth=270.0, altitude=25.0), ~blocked)
+
+
+@pytest.mark.parametrize(
+    ("azimuth", "altitude", "dx", "dy"),
+    [(315.0, 20.0, 1.0, 1.0), (10.0, 35.0, 2.0, 1.0), (123.0, 15.0, 0.7, 1.3), (250.0, 40.0, 1, 1)],
+)
+def test_matches_brute_force(azimuth, altitude, dx, dy):
+    z = rough_terrain((37, 45), 2)
+    z[5:8, 10:20] = np.nan
+    got = cast_shadows(z, dx=dx, dy=dy, azimuth=azimuth, altitude=altitude)
+    want = reference_shadows(z, azimuth, altitude, dx, dy)
+    assert 0 < np.nanmean(want) < 1  # a mix of lit and shadowed cells
+    np.testing.assert_array_equal(got, want)
+
+
+def test_soft_shadows():
+    z, mid = wall_scene(270.0, 20.0, 1.0, 1.0)
+    hard = cast_shadows(z, azimuth=270.0, altitude=30.0)
+    soft = cast_shadows(z, azimuth=270.0, altitude=30.0, sun_radius=3.0)
+    line = soft[5, mid + 1 :]
+    assert (np.diff(line) >= -1e-7).all()  # brightens away from the wall
+    assert line[0] == 0.0 and line[-1] == 1.0
+    assert ((line > 0.01) & (line < 0.99)).sum() >= 4  # a penumbra several cells wide
+    # the disc's centre sits on the hard shadow's edge: about half lit there
+    edge = int(np.argmax(hard[5, mid + 1 :] > 0.5))
+    assert 0.2 < line[edge - 1] < 0.8 or 0.2 < line[edge] < 0.8
+    tiny = cast_shadows(z, azimuth=270.0, altitude=30.0, sun_radius=1e-4)
+    assert np.abs(tiny - hard).sum() <= 2
+    np.testing.assert_array_equal(cast_shadows(np.zeros((5, 5)), sun_radius=5.0), 1.0)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "name"),
+    [
+        ({"altitude": 0.0}, "altitude"),
+        ({"altitude": -5.0}, "altitude"),
+        ({"altitude": 90.5}, "altitude"),
+        ({"azimuth": float("nan")}, "azimuth"),
+        ({"dx": 0.0}, "dx"),
+        ({"dy": -1.0}, "dy"),
+        ({"z_factor": float("inf")}, "z_factor"),
+        ({"sun_radius": -1.0}, "sun_radius"),
+        ({"altitude": 10.0, "sun_radius": 11.0}, "sun_radius"),
+        ({"mask": np.ones((2, 2), bool)}, "mask"),
+    ],
+)
+def test_cast_shadows_bad_parameters(kwargs, name):
+    with pytest.raises(InputError, match=name):
+        cast_shadows(np.zeros((4, 5)), **kwargs)
+
+
+def test_bad_heights():
+    for bad in (np.zeros(5), np.zeros((2, 3, 4)), np.array([["a", "b"]])):
+        with pytest.raises(InputError, match="heights"):
+            cast_shadows(bad)
+        with pytest.raises(InputError, match="heights"):
+            sky_view(bad)
+
+
+grids = arrays(
+    np.float64,
+    st.tuples(st.integers(1, 9), st.integers(1, 9)),
+    elements=st.one_of(st.floats(-50, 50), st.just(np.nan)),
+)
+
+
+@settings(max_examples=60, deadline=None)
+@given(z=grids, azimuth=st.floats(0, 360), altitude=st.floats(1, 89))
+def test_cast_shadows_odd_inputs(z, azimuth, altitude):
+    out = cast_shadows(z, azimuth=azimuth, altitude=altitude)
+    assert out.shape == z.shape and out.dtype == np.float32
+    np.testing.assert_array_equal(np.isnan(out), np.isnan(z))
+    assert ((out[~np.isnan(out)] == 0) | (out[~np.isnan(out)] == 1)).all()
+    np.testing.assert_array_equal(out, reference_shadows(z, azimuth, altitude, 1.0, 1.0))
+
+
+# ---------------------------------------------------------------------------------------------
+# sky_view
+
+
+def test_sky_view_flat_plane():
+    np.testing.assert_allclose(sky_view(np.full((30, 30), 3.0)), 1.0, atol=1e-6)
+
+
+def v_valley_expected(slope, directions):
+    """A long N-S V-valley z = slope * |east|: from the floor, the horizon in direction phi is
+    atan(slope * |sin phi|) at every distance."""
+    phi = np.radians(360.0 * np.arange(directions) / directions)
+    return 1.0 - np.mean(np.sin(np.arctan(slope * np.abs(np.sin(phi)))))
+
+
+@pytest.mark.parametrize("directions", [4, 8, 16, 7])
+@pytest.mark.parametrize(("dx", "dy"), [(1.0, 1.0), (2.0, 1.0), (1.0, 3.0)])
+def test_sky_view_v_valley_floor(directions, dx, dy):
+    slope = 0.8
+    n = 61
+    c = n // 2
+    east = (np.arange(n) - c) * dx
+    z = np.tile(slope * np.abs(east), (n, 1))
+    svf = sky_view(z, dx=dx, dy=dy, directions=directions, radius=8.0 * max(dx, dy))
+    np.testing.assert_allclose(svf[c, c], v_valley_expected(slope, directions), atol=1e-3)
+    # along the whole floor away from the north/south edges
+    np.testing.assert_allclose(svf[10:-10, c], v_valley_expected(slope, directions), atol=1e-3)
+
+
+def test_sky_view_deeper_trench_is_darker():
+    n = 41
+    east = np.abs(np.arange(n) - n // 2).astype(float)
+    values = [sky_view(np.tile(s * east, (n, 1)), radius=10.0)[20, 20] for s in (0.2, 0.5, 1, 3)]
+    assert np.all(np.diff(values) < 0)
+    assert values[-1] < 0.5
+
+
+def test_sky_view_peak_is_one_pit_is_less():
+    n = 41
+    rows, cols = np.mgrid[0:n, 0:n] - n // 2
+    r = np.hypot(rows, cols)
+    np.testing.assert_allclose(sky_view(-0.7 * r)[20, 20], 1.0, atol=1e-6)  # cone peak
+    ridge = -0.9 * np.abs(cols).astype(float)
+    np.testing.assert_allclose(sky_view(ridge)[5:-5, 20], 1.0, atol=1e-6)  # convex ridge
+    pit = sky_view(0.7 * r, radius=15.0)[20, 20]
+    exact = 1.0 - math.sin(math.atan(0.7))
+    # linear interpolation across a cone only over-estimates its heights: a bit darker
+    assert exact - 0.02 < pit <= exact + 1e-6
+
+
+def test_sky_view_matches_brute_force():
+    z = rough_terrain((33, 40), 3)
+    z[10:12, 5:9] = np.nan
+    for directions, radius, dx, dy in ((16, 12.0, 1.0, 1.0), (9, 20.0, 1.5, 0.8)):
+        got = sky_view(z, dx=dx, dy=dy, directions=directions, radius=radius)
+        want = reference_sky_view(z, directions, radius, dx, dy)
+        np.testing.assert_array_equal(np.isnan(got), np.isnan(want))
+        np.testing.assert_allclose(got, want, atol=2e-6, equal_nan=True)
+        assert np.nanmin(got) < 0.9
+
+
+def test_sky_view_nodata():
+    z = np.zeros((31, 41))
+    z[:, 20] = 50.0  # a tall wall 5 m east of the cell (15, 15)
+    walled = sky_view(z, directions=8, radius=10.0)
+    assert walled[15, 15] < 0.9
+    z[:, 20] = np.nan  # as nodata it must not block
+    z[2, 3] = -np.inf
+    before = z.copy()
+    svf = sky_view(z, directions=8, radius=10.0)
+    np.testing.assert_array_equal(z, before)
+    np.testing.assert_array_equal(np.isnan(svf), ~np.isfinite(z))
+    np.testing.assert_allclose(svf[~np.isnan(svf)], 1.0, atol=1e-6)
+    mask = np.ones(z.shape, bool)
+    mask[4, 4] = False
+    assert np.isnan(sky_view(z, mask=mask)[4, 4])
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "name"),
+    [
+        ({"directions": 0}, "directions"),
+        ({"directions": 2.5}, "directions"),
+        ({"directions": True}, "directions"),
+        ({"radius": 0.0}, "radius"),
+        ({"radius": float("nan")}, "radius"),
+        ({"dx": float("inf")}, "dx"),
+        ({"z_factor": float("nan")}, "z_factor"),
+        ({"mask": np.ones((4, 4), bool)}, "mask"),
+    ],
+)
+def test_sky_view_bad_parameters(kwargs, name):
+    with pytest.raises(InputError, match=name):
+        sky_view(np.zeros((4, 5)), **kwargs)
+
+
+@settings(max_examples=60, deadline=None)
+@given(z=grids, directions=st.integers(1, 12), radius=st.floats(0.5, 12))
+def test_sky_view_odd_inputs(z, directions, radius):
+    out = sky_view(z, directions=directions, radius=radius)
+    assert out.shape == z.shape and out.dtype == np.float32
+    np.testing.assert_array_equal(np.isnan(out), np.isnan(z))
+    valid = out[~np.isnan(out)]
+    assert ((valid >= 0) & (valid <= 1)).all()
+    want = reference_sky_view(z, directions, radius, 1.0, 1.0)
+    np.testing.assert_allclose(out, want, atol=2e-6, equal_nan=True)

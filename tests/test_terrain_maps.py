@@ -1,0 +1,306 @@
+"""Topographic and bird's-eye maps: nodata handling, georeference, CLI, G-buffer reuse."""
+
+from __future__ import annotations
+
+import io
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from PIL import Image
+
+import sciviz_gbuf as sg
+from sciviz_gbuf.cli import main
+from sciviz_gbuf.compose import write_geotiff
+from sciviz_gbuf.errors import InputError
+from sciviz_gbuf.readers import read_dem
+from sciviz_gbuf.recipes import birdseye_gbuffer, birdseye_layers, nice_intervals
+
+rasterio = pytest.importorskip("rasterio")
+
+FIXED = {"interval": 5.0, "major_interval": 25.0, "vmin": 0.0, "vmax": 200.0}
+
+
+def plane_dem(shape=(80, 90), east=0.4, north=-0.25, spacing=10.0):
+    rows, cols = np.mgrid[0 : shape[0], 0 : shape[1]].astype(np.float32)
+    z = 100.0 + east * cols * spacing + north * (-rows * spacing)
+    return z.astype(np.float32)
+
+
+def blob_hole(shape, seed=3):
+    """An irregular nodata region touching nothing but itself (a random blob)."""
+    from scipy import ndimage
+
+    rng = np.random.default_rng(seed)
+    noise = ndimage.gaussian_filter(rng.standard_normal(shape), 6)
+    return noise > np.quantile(noise, 0.7)
+
+
+# ------------------------------------------------------------------------- plan-view map
+
+
+def test_nodata_hole_changes_nothing_outside_itself():
+    """A plane with an irregular hole: every valid pixel is as without the hole (relief,
+    bands and contours), so the hole leaves no line, edge or terrace at its border."""
+    z = plane_dem()
+    hole = blob_hole(z.shape)
+    holed = z.copy()
+    holed[hole] = np.nan
+    full = sg.topographic_map(read_dem(z, spacing=10.0), **FIXED)
+    cut = sg.topographic_map(read_dem(holed, spacing=10.0), **FIXED)
+    assert (cut[hole] == 0).all()  # transparent black
+    assert (cut[~hole, 3] == 255).all()
+    diff = np.abs(full[~hole].astype(int) - cut[~hole].astype(int))
+    assert diff.max() <= 1, diff.max()
+    # and the plane did get contour lines (the test is not vacuous)
+    no_lines = sg.topographic_map(read_dem(z, spacing=10.0), contours=False, **FIXED)
+    assert (np.abs(full.astype(int) - no_lines.astype(int)).max(axis=-1) > 40).mean() > 0.05
+
+
+def test_plane_without_levels_is_one_colour_up_to_the_hole():
+    """Between two levels a plane is a single band, a single relief shade and no ink."""
+    z = plane_dem(east=0.001, north=0.0005) + 1.0  # 101.0 .. 101.9: between two levels
+    z[blob_hole(z.shape)] = np.nan
+    m = sg.topographic_map(read_dem(z, spacing=10.0), **FIXED)
+    valid = m[..., 3] == 255
+    colours = np.unique(m[valid], axis=0)
+    assert len(colours) == 1, colours
+
+
+def test_hugo_nodata_transparent(shared_data):
+    dem = read_dem(shared_data / "dem" / "hugo_site.asc")
+    m = sg.topographic_map(dem)
+    assert m.shape == (*dem.shape, 4)
+    np.testing.assert_array_equal(m[..., 3] == 0, ~dem.mask)
+    assert (m[~dem.mask] == 0).all()
+
+
+def test_srtm_flat_sea_has_no_noise(shared_data):
+    """N10W110: the open sea (exactly 0 m) is one colour; lines only near the atoll."""
+    from scipy import ndimage
+
+    dem = read_dem(shared_data / "dem" / "N10W110.hgt")
+    m = sg.topographic_map(dem, interval=1.0, major_interval=5.0, sea_level=0.5)
+    land = dem.heights != 0
+    far = ~ndimage.binary_dilation(land, iterations=4)
+    assert far.mean() > 0.9
+    assert len(np.unique(m[far], axis=0)) == 1
+    assert not (m[land] == m[far][0]).all(axis=-1).all()  # the atoll is drawn
+
+
+def test_relief_agrees_with_hillshade_on_interior():
+    """On open terrain without bands and contours the map is grey relief: monotone in GDAL's
+    hillshade (the same shade drives both)."""
+    rng = np.random.default_rng(0)
+    from scipy import ndimage
+
+    z = ndimage.gaussian_filter(rng.standard_normal((64, 64)), 4).astype(np.float32) * 400
+    dem = read_dem(z, spacing=10.0)
+    m = sg.topographic_map(dem, contours=False, bands=False)
+    sh = sg.filters.hillshade(z, dx=10.0, dy=10.0)
+    grey = m[..., 0].astype(float)
+    order = np.argsort(sh.ravel())
+    assert np.all(np.diff(grey.ravel()[order]) >= -1)
+    flat = math.sin(math.radians(45))
+    # darker than flat ground -> darker than paper; flat -> paper white
+    assert grey.ravel()[sh.ravel() < 0.5 * flat].max() < 255 * 0.85
+
+
+@pytest.mark.parametrize(
+    ("lo", "hi", "expected"),
+    [(250.0, 1150.0, (20.0, 100.0)), (0.0, 9.0, (0.2, 1.0)), (0.0, 3.0, (0.1, 0.5)), (1660.0, 1711.0, (1.0, 5.0))],
+)
+def test_nice_intervals(lo, hi, expected):
+    assert nice_intervals(lo, hi) == pytest.approx(expected)
+
+
+@given(st.floats(-1e4, 1e4), st.floats(1e-3, 1e5))
+@settings(max_examples=60, deadline=None)
+def test_nice_intervals_are_round(lo, span):
+    minor, major = nice_intervals(lo, lo + span)
+    mant = major / 10 ** math.floor(math.log10(major))
+    assert any(math.isclose(mant, m, rel_tol=1e-9) for m in (1, 2, 2.5, 5, 10))
+    assert 8 / math.sqrt(2) - 1e-9 <= span / major <= 8 * math.sqrt(2) + 1e-9
+    assert minor == pytest.approx(major / 5)
+
+
+def test_bad_parameters():
+    z = plane_dem()
+    with pytest.raises(InputError, match="bands"):
+        sg.topographic_map(z, bands="rainbow")
+    with pytest.raises(InputError, match="contour_color"):
+        sg.topographic_map(z, contour_color=(2, 0, 0))
+    with pytest.raises(InputError, match="interval"):
+        sg.topographic_map(z, interval=-1.0)
+
+
+def test_input_not_modified():
+    z = plane_dem()
+    z[5:9, 5:9] = np.nan
+    before = z.copy()
+    sg.topographic_map(z)
+    np.testing.assert_array_equal(z, before)
+
+
+# ------------------------------------------------------------------------- GeoTIFF
+
+
+def test_geotiff_keeps_crs_and_transform(tmp_path):
+    """A projected GeoTIFF DEM in, the map's GeoTIFF out with the same CRS and transform."""
+    from rasterio.transform import from_origin
+
+    z = plane_dem((50, 70))
+    z[:4, :6] = -9999
+    src = tmp_path / "dem.tif"
+    transform = from_origin(500000.0, 4200000.0, 10.0, 10.0)
+    with rasterio.open(
+        src, "w", driver="GTiff", width=70, height=50, count=1, dtype="float32",
+        crs="EPSG:32617", transform=transform, nodata=-9999,
+    ) as f:  # fmt: skip
+        f.write(z, 1)
+    out = tmp_path / "map.tif"
+    argv = ["topo", str(src), "-o", str(tmp_path / "map.png"), "--geotiff", str(out)]
+    assert main([*argv, "--no-progress"]) == 0
+    with rasterio.open(out) as f, rasterio.open(src) as g:
+        assert f.crs == g.crs
+        assert f.transform == g.transform
+        assert f.count == 4 and f.colorinterp[3].name == "alpha"
+        rgba = np.moveaxis(f.read(), 0, 2)
+    png = np.asarray(Image.open(tmp_path / "map.png"))
+    np.testing.assert_array_equal(rgba, png)
+    assert (rgba[:4, :6, 3] == 0).all() and (rgba[10:, 10:, 3] == 255).all()
+
+
+def test_geotiff_of_geographic_hgt(tmp_path, shared_data):
+    dem = read_dem(shared_data / "dem" / "N10W110.hgt")
+    m = sg.topographic_map(dem)
+    out = write_geotiff(tmp_path / "n10.tif", m, dem=dem)
+    with rasterio.open(out) as f:
+        assert f.crs.to_epsg() == 4326
+        np.testing.assert_allclose(f.transform.to_gdal(), dem.transform, rtol=0, atol=1e-12)
+
+
+def test_write_geotiff_errors(tmp_path):
+    img = np.zeros((8, 8, 4), np.uint8)
+    with pytest.raises(InputError, match="georeference"):
+        write_geotiff(tmp_path / "a.tif", img)
+    with pytest.raises(InputError, match=r"\.tif"):
+        write_geotiff(tmp_path / "a.png", img, transform=(0, 1, 0, 0, 0, -1))
+    with pytest.raises(InputError, match="crs"):
+        write_geotiff(tmp_path / "a.tif", img, transform=(0, 1, 0, 0, 0, -1), crs="EPSG:-5")
+    with pytest.raises(InputError, match="directory"):
+        write_geotiff(tmp_path / "no" / "a.tif", img, transform=(0, 1, 0, 0, 0, -1))
+
+
+# ------------------------------------------------------------------------- CLI
+
+
+def test_cli_topo_bundled_default(tmp_path, capsys):
+    out = tmp_path / "t.png"
+    assert main(["topo", "-o", str(out), "--contours", "20,100", "--no-progress"]) == 0
+    img = np.asarray(Image.open(out))
+    assert img.shape == (344, 403, 4)
+    assert "wrote" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--contours", "20,x"], "MINOR,MAJOR"),
+        (["--contours", "100,20"], "MINOR <= MAJOR"),
+        (["--bands", "-3"], "interval > 0"),
+        (["--altitude", "0"], "degrees"),
+    ],
+)
+def test_cli_topo_bad_arguments(tmp_path, capsys, argv, message):
+    with pytest.raises(SystemExit) as exc:
+        main(["topo", "-o", str(tmp_path / "t.png"), *argv])
+    assert exc.value.code == 2
+    assert message in capsys.readouterr().err
+
+
+def test_cli_topo_bad_file(tmp_path, capsys):
+    bad = tmp_path / "bad.asc"
+    bad.write_text("ncols 3\nnrows 3\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2 3\n4 5 6\n")
+    assert main(["topo", str(bad), "-o", str(tmp_path / "t.png")]) == 2
+    err = capsys.readouterr().err
+    assert "bad.asc" in err and "error" in err
+    assert not (tmp_path / "t.png").exists()
+
+
+# ------------------------------------------------------------------------- bird's-eye
+
+
+@pytest.fixture(scope="module")
+def ramp_gbuffer():
+    """A plane falling 0.5 m per metre eastwards (facing the eye), seen from the south-east."""
+    z = plane_dem((120, 120), east=-0.5, north=0.0, spacing=1.0)
+    return birdseye_gbuffer(read_dem(z, spacing=1.0), window_size=(320, 240))
+
+
+def test_birdseye_contours_sit_on_their_levels(ramp_gbuffer):
+    """Ink in the bird's-eye contour image lies where the captured height is near a level."""
+    lay = birdseye_layers(ramp_gbuffer, interval=10.0, major_interval=50.0)
+    cn, wz = lay["cn"], lay["wz"]
+    inked = (cn > 0.9) & np.isfinite(wz)
+    assert inked.sum() > 200
+    off = np.abs(wz[inked] - 10.0 * np.round(wz[inked] / 10.0))
+    # the ramp climbs well under 1 m per output pixel here; a 2 px major line spans < 2 m
+    assert np.quantile(off, 0.99) < 2.0
+    blank = (cn == 0) & np.isfinite(wz)
+    off_blank = np.abs(wz[blank] - 10.0 * np.round(wz[blank] / 10.0))
+    assert np.median(off_blank) > 2.0
+
+
+def test_birdseye_map_reuses_gbuffer(ramp_gbuffer):
+    """The G-buffer passed back in gives the map without rendering, identically."""
+    a = sg.birdseye_map(ramp_gbuffer, interval=10.0, major_interval=50.0)
+    b = sg.birdseye_map(ramp_gbuffer, interval=10.0, major_interval=50.0)
+    np.testing.assert_array_equal(a, b)
+    assert a.shape == (240, 320, 4)
+    assert a[0, 0, 3] == 0 and a[120, 160, 3] == 255  # sky transparent, ground opaque
+    c = sg.birdseye_map(ramp_gbuffer, interval=5.0, major_interval=25.0)
+    assert (a != c).any()
+
+
+def test_birdseye_nodata_is_transparent(shared_data):
+    dem = read_dem(shared_data / "dem" / "hugo_site.asc")
+    gb = birdseye_gbuffer(dem, window_size=(320, 240), vert_exag=2.0)
+    assert not np.isnan(gb.scalars["elevation"][gb.mask]).any()
+    m = sg.birdseye_map(gb)
+    lay = birdseye_layers(gb)
+    np.testing.assert_array_equal(m[..., 3] == 0, lay["alpha"] == 0)
+    # the framing follows the valid data: it fills a fair part of the image
+    assert (m[..., 3] > 0).mean() > 0.2
+
+
+def test_birdseye_wrong_gbuffer(ramp_gbuffer):
+    gb = sg.capture(sg.datasets.load_nut(), window_size=(64, 48))
+    with pytest.raises(InputError, match="elevation"):
+        sg.birdseye_map(gb)
+
+
+def test_cli_birdseye_and_sumi_e(tmp_path, shared_data):
+    src = shared_data / "dem" / "pre_runout_DEM.asc"
+    for style in ("mx4", "sumi-e"):
+        out = tmp_path / f"{style}.png"
+        args = ["birdseye", str(src), "-o", str(out), "--size", "200x150", "--style", style]
+        assert main([*args, "--elevation-angle", "30", "--no-progress"]) == 0
+        img = np.asarray(Image.open(out))
+        assert img.shape == (150, 200, 4)
+        assert img[..., 3].max() == 255
+    with pytest.raises(SystemExit):
+        main(["birdseye", str(src), "-o", str(tmp_path / "x.png"), "--elevation-angle", "95"])
+
+
+def test_large_png_encoder_round_trip():
+    from sciviz_gbuf._png import encode_png
+
+    rng = np.random.default_rng(1)
+    for shape in [(700, 33, 4), (513, 300, 3), (300, 257)]:
+        a = rng.integers(0, 256, shape, dtype=np.uint8)
+        a[::7] = a[0]  # some repeated rows
+        back = np.asarray(Image.open(io.BytesIO(encode_png(a))))
+        np.testing.assert_array_equal(back, a)
