@@ -110,7 +110,12 @@ def test_relief_agrees_with_hillshade_on_interior():
 
 @pytest.mark.parametrize(
     ("lo", "hi", "expected"),
-    [(250.0, 1150.0, (20.0, 100.0)), (0.0, 9.0, (0.2, 1.0)), (0.0, 3.0, (0.1, 0.5)), (1660.0, 1711.0, (1.0, 5.0))],
+    [
+        (250.0, 1150.0, (20.0, 100.0)),
+        (0.0, 9.0, (0.2, 1.0)),
+        (0.0, 3.0, (0.1, 0.5)),
+        (1660.0, 1711.0, (1.0, 5.0)),
+    ],
 )
 def test_nice_intervals(lo, hi, expected):
     assert nice_intervals(lo, hi) == pytest.approx(expected)
