@@ -1,0 +1,172 @@
+"""Whole-process benchmark of ``sciviz-gbuf topo`` against the three GDAL commands it replaces.
+
+On a synthetic GeoTIFF DEM (fractal terrain, float32, 10 m UTM cells, a nodata lake), in the
+same run:
+
+- ours: ``sciviz-gbuf topo DEM -o map.png --contours 20,100`` - relief, colour bands and
+  major/minor contour lines composited into one RGBA PNG (and once more with ``--geotiff``);
+- GDAL: ``gdaldem hillshade`` + ``gdaldem color-relief`` + ``gdal_contour -i 20`` (three
+  separate outputs, not yet one picture: the comparison flatters GDAL).
+
+Each command is a fresh process, timed from start to exit (imports, numba cache loading, reading
+and writing included); peak resident memory from ``getrusage``. Every command runs ``--repeat``
+times and the best time is reported.
+
+Usage: ``python benchmarks/bench_terrain.py [--sizes 2048,4096,8192] [--repeat 1]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+# Colour-relief table of gdaldem (heights in metres of the synthetic terrain: 0 - 2000).
+RAMP = """\
+0 87 158 97
+400 148 194 120
+800 217 224 148
+1200 245 222 158
+1600 184 143 117
+2000 247 247 247
+nv 0 0 0 0
+"""
+
+
+def make_dem(path: Path, n: int, seed: int = 1) -> None:
+    """Fractal terrain (power-law spectrum) scaled to 0 - 2000 m, with a round nodata lake."""
+    import rasterio
+    from rasterio.transform import from_origin
+
+    rng = np.random.default_rng(seed)
+    k = np.fft.fftfreq(n).astype(np.float32)[:, None]
+    ell = np.fft.rfftfreq(n).astype(np.float32)[None, :]
+    r = np.hypot(k, ell)
+    r[0, 0] = 1.0
+    spec = rng.standard_normal((n, n // 2 + 1), dtype=np.float32) + 1j * rng.standard_normal(
+        (n, n // 2 + 1), dtype=np.float32
+    )
+    spec /= r**1.8
+    z = np.fft.irfft2(spec, s=(n, n)).astype(np.float32)
+    del spec, r
+    z -= z.min()
+    z *= 2000.0 / z.max()
+    yy, xx = np.ogrid[:n, :n]
+    z[(yy - n * 0.3) ** 2 + (xx - n * 0.6) ** 2 < (n * 0.08) ** 2] = -9999.0
+    with rasterio.open(
+        path,
+        "w",
+        driver="GTiff",
+        width=n,
+        height=n,
+        count=1,
+        dtype="float32",
+        crs="EPSG:32613",
+        transform=from_origin(400000.0, 4500000.0, 10.0, 10.0),
+        nodata=-9999.0,
+        tiled=True,
+    ) as f:
+        f.write(z, 1)
+
+
+def run(cmd: list[str], repeat: int) -> tuple[float, float]:
+    """Best wall time over ``repeat`` runs and the peak RSS (MB) of the command's process."""
+    best, rss = float("inf"), 0.0
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+        _, status, usage = os.wait4(proc.pid, 0)
+        dt = time.perf_counter() - t0
+        proc.returncode = os.waitstatus_to_exitcode(status)
+        err = proc.stderr.read().decode(errors="replace") if proc.stderr else ""
+        if proc.returncode != 0:
+            raise SystemExit(f"failed: {' '.join(cmd)}\n{err}")
+        best = min(best, dt)
+        rss = max(rss, usage.ru_maxrss / 1024.0)
+    return best, rss
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--sizes", default="2048,4096,8192", help="DEM sizes (pixels a side)")
+    parser.add_argument("--repeat", type=int, default=1, help="runs per command (best kept)")
+    args = parser.parse_args()
+    tools = ("gdaldem", "gdal_contour")
+    missing = [t for t in tools if shutil.which(t) is None]
+    if missing:
+        raise SystemExit(f"needs {', '.join(missing)} (Debian: apt install gdal-bin)")
+    ours = [str(Path(sys.executable).with_name("sciviz-gbuf"))]
+    if not Path(ours[0]).exists():
+        ours = [sys.executable, "-m", "sciviz_gbuf"]
+    sizes = [int(s) for s in args.sizes.split(",")]
+    print(f"# {os.cpu_count()} CPUs, {sys.platform}, GDAL {gdal_version()}")
+    # Warm the numba cache once so that no row pays for compiling.
+    with tempfile.TemporaryDirectory() as tmp:
+        t = Path(tmp)
+        make_dem(t / "warm.tif", 256)
+        run([*ours, "topo", str(t / "warm.tif"), "-o", str(t / "w.png"), "--no-progress"], 1)
+    header = f"{'size':>6} {'step':<44} {'s':>7} {'MPix/s':>7} {'MB RSS':>7} {'vs GDAL':>8}"
+    print(header)
+    print("-" * len(header))
+    for n in sizes:
+        with tempfile.TemporaryDirectory() as tmp:
+            t = Path(tmp)
+            dem = t / "dem.tif"
+            make_dem(dem, n)
+            (t / "ramp.txt").write_text(RAMP)
+            gdal = [
+                ("gdaldem hillshade", ["gdaldem", "hillshade", "-q", str(dem), str(t / "hs.tif")]),
+                (
+                    "gdaldem color-relief",
+                    [
+                        "gdaldem",
+                        "color-relief",
+                        "-q",
+                        "-alpha",
+                        str(dem),
+                        str(t / "ramp.txt"),
+                        str(t / "cr.tif"),
+                    ],
+                ),
+                (
+                    "gdal_contour -i 20",
+                    ["gdal_contour", "-q", "-i", "20", "-a", "elev", str(dem), str(t / "c.gpkg")],
+                ),
+            ]
+            ours_cmds = [
+                ("sciviz-gbuf topo --contours 20,100 (PNG)", []),
+                ("sciviz-gbuf topo ... --geotiff (PNG + TIF)", ["--geotiff", str(t / "m.tif")]),
+            ]
+            rows = []
+            gdal_total = 0.0
+            for name, cmd in gdal:
+                s, rss = run(cmd, args.repeat)
+                gdal_total += s
+                rows.append((name, s, rss))
+            rows.append(("GDAL total (3 commands)", gdal_total, float("nan")))
+            for name, extra in ours_cmds:
+                cmd = [*ours, "topo", str(dem), "-o", str(t / "map.png"), "--contours", "20,100"]
+                s, rss = run([*cmd, *extra, "--no-progress"], args.repeat)
+                rows.append((name, s, rss))
+            for name, s, rss in rows:
+                ratio = f"{gdal_total / s:7.1f}x" if name.startswith("sciviz") else ""
+                mp = n * n / s / 1e6
+                mem = f"{rss:7.0f}" if rss == rss else " " * 7
+                print(f"{n:>6} {name:<44} {s:7.2f} {mp:7.1f} {mem} {ratio:>8}")
+            print()
+
+
+def gdal_version() -> str:
+    out = subprocess.run(["gdalinfo", "--version"], capture_output=True, text=True).stdout
+    return out.split(",")[0].replace("GDAL ", "").strip() or "?"
+
+
+if __name__ == "__main__":
+    main()
