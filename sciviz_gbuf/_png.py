@@ -5,6 +5,8 @@ rows is deflated separately (zlib releases the GIL) and the blocks are joined in
 zlib stream PNG requires, as ``pigz`` does: every block but the last ends with a sync flush, so
 the raw deflate streams concatenate, and the Adler-32 of the whole is computed alongside.
 Rows use PNG's "Up" filter, computed with numpy, which suits maps (large areas of one colour).
+Deflate is ISA-L's (the ``isal`` package: 6x zlib's speed at level 1, output 4% larger) when
+installed, else zlib's.
 """
 
 from __future__ import annotations
@@ -18,6 +20,11 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["encode_png", "write_png_fast"]
+
+try:
+    from isal import isal_zlib as _deflate
+except ImportError:  # pragma: no cover - isal is a dependency; zlib is the fallback
+    _deflate = zlib
 
 _COLOUR_TYPE = {1: 0, 2: 4, 3: 2, 4: 6}  # channels -> grey, grey+alpha, RGB, RGBA
 _BLOCK_ROWS = 256
@@ -46,8 +53,9 @@ def _filtered_block(a: np.ndarray, r0: int, r1: int) -> bytes:
     return out.tobytes()
 
 
-def encode_png(image: np.ndarray, *, level: int = 3, threads: int | None = None) -> bytes:
-    """PNG bytes of a uint8 image ``(H, W)``, ``(H, W, 2)``, ``(H, W, 3)`` or ``(H, W, 4)``."""
+def encode_png(image: np.ndarray, *, level: int = 1, threads: int | None = None) -> bytes:
+    """PNG bytes of a uint8 image ``(H, W)``, ``(H, W, 2)``, ``(H, W, 3)`` or ``(H, W, 4)``;
+    ``level`` 0-3 (ISA-L's range; zlib's levels above 3 are not used)."""
     a = np.ascontiguousarray(image, dtype=np.uint8)
     if a.ndim == 2:
         a = a[..., None]
@@ -56,16 +64,17 @@ def encode_png(image: np.ndarray, *, level: int = 3, threads: int | None = None)
 
     def deflate(r0: int) -> tuple[bytes, bytes]:
         raw = _filtered_block(a, r0, min(r0 + _BLOCK_ROWS, h))
-        comp = zlib.compressobj(level, zlib.DEFLATED, -15)
+        comp = _deflate.compressobj(min(max(level, 0), 3), zlib.DEFLATED, -15)
         last = r0 == starts[-1]
-        return raw, comp.compress(raw) + comp.flush(zlib.Z_FINISH if last else zlib.Z_FULL_FLUSH)
+        mode = _deflate.Z_FINISH if last else _deflate.Z_FULL_FLUSH
+        return raw, comp.compress(raw) + comp.flush(mode)
 
     n = threads or min(len(starts), os.cpu_count() or 1)
     with ThreadPoolExecutor(max_workers=max(n, 1)) as pool:
         parts = list(pool.map(deflate, starts))
     adler = 1
     for raw, _ in parts:
-        adler = zlib.adler32(raw, adler)
+        adler = _deflate.adler32(raw, adler)
     stream = b"".join([b"\x78\x01", *(p for _, p in parts), struct.pack(">I", adler)])
     header = struct.pack(">IIBBBBB", w, h, 8, _COLOUR_TYPE[c], 0, 0, 0)
     idat = b"".join(

@@ -17,6 +17,7 @@ import os
 from collections.abc import Sequence
 
 import numpy as np
+from numba import njit, prange
 
 from .._progress import progress
 from ..errors import InputError
@@ -60,40 +61,46 @@ def _fill_ring(z: np.ndarray) -> np.ndarray:
     Every direction with two valid cells ``a`` (next) and ``b`` (beyond) gives ``2a - b``; their
     mean is exact on a plane, so a 3x3 relief operator sees no step at a nodata border (GDAL's
     rule, the centre value for a missing neighbour, halves the slope there: a bright or dark rim).
+    Without such a pair, the mean of the valid neighbours. ``z`` itself when it has no nodata.
     """
-    valid = np.isfinite(z)
-    if valid.all():
+    if not np.isnan(z).any():
         return z
-    h, w = z.shape
-    near = np.zeros((h + 2, w + 2), dtype=bool)
-    for di in (-1, 0, 1):
-        for dj in (-1, 0, 1):
-            near[1 + di : h + 1 + di, 1 + dj : w + 1 + dj] |= valid
-    ri, rj = np.nonzero(near[1:-1, 1:-1] & ~valid)
-    if ri.size == 0:
-        return z
-    zp = np.pad(z, 2, constant_values=np.nan)
-    total = np.zeros(ri.size)
-    count = np.zeros(ri.size)
-    near_sum = np.zeros(ri.size)
-    near_count = np.zeros(ri.size)
-    for di in (-1, 0, 1):
-        for dj in (-1, 0, 1):
-            if di == dj == 0:
-                continue
-            a = zp[ri + 2 + di, rj + 2 + dj].astype(np.float64)
-            b = zp[ri + 2 + 2 * di, rj + 2 + 2 * dj].astype(np.float64)
-            e = 2.0 * a - b
-            ok = np.isfinite(e)
-            total += np.where(ok, e, 0.0)
-            count += ok
-            ok_a = np.isfinite(a)
-            near_sum += np.where(ok_a, a, 0.0)
-            near_count += ok_a
-    out = z.copy()
-    with np.errstate(invalid="ignore", divide="ignore"):
-        out[ri, rj] = np.where(count > 0, total / count, near_sum / near_count)
+    out = np.empty_like(z, dtype=np.float32)
+    _fill_ring_kernel(np.ascontiguousarray(z, dtype=np.float32), out)
     return out
+
+
+@njit(parallel=True, cache=True)
+def _fill_ring_kernel(z: np.ndarray, out: np.ndarray) -> None:
+    h, w = z.shape
+    for i in prange(h):
+        for j in range(w):
+            v = z[i, j]
+            out[i, j] = v
+            if not np.isnan(v):
+                continue
+            total = 0.0
+            count = 0
+            near = 0.0
+            n_near = 0
+            for di in range(-1, 2):
+                for dj in range(-1, 2):
+                    if di == 0 and dj == 0:
+                        continue
+                    i1, j1 = i + di, j + dj
+                    if i1 < 0 or i1 >= h or j1 < 0 or j1 >= w or np.isnan(z[i1, j1]):
+                        continue
+                    a = np.float64(z[i1, j1])
+                    near += a
+                    n_near += 1
+                    i2, j2 = i1 + di, j1 + dj
+                    if 0 <= i2 < h and 0 <= j2 < w and not np.isnan(z[i2, j2]):
+                        total += 2.0 * a - z[i2, j2]
+                        count += 1
+            if count > 0:
+                out[i, j] = total / count
+            elif n_near > 0:
+                out[i, j] = near / n_near
 
 
 def relief_light(direct: np.ndarray, ambient: np.ndarray | float = 1.0) -> np.ndarray:
