@@ -22,19 +22,23 @@ import numpy as np
 
 from .capture import _check_window_size, capture
 from .compose import colorize, ids_to_rgb, montage, normals_to_rgb, write_png
-from .datasets import load_jacksboro_terrain, load_nut
+from .datasets import load_jacksboro_dem, load_jacksboro_terrain, load_nut
 from .filters import lambert
 from .gbuffer import GBuffer
 from .recipes import CAPTIONS as EDGE_CAPTIONS
 from .recipes import (
     CONTOUR_CAPTIONS,
+    birdseye_gbuffer,
+    birdseye_panels,
     fig3_panels,
     fig5_panels,
     fig6_panels,
     fig7_panels,
     fig11_panels,
     nut_camera,
+    sumi_e,
     terrain_birdseye_camera,
+    topographic_map,
     write_panels,
 )
 
@@ -254,6 +258,52 @@ def _contour_figures(size: int) -> list[_Figure]:
     ]
 
 
+TERRAIN_CAPTIONS = {
+    "topo": "topographic map (Fig. 11 mx3 on the DEM's own 3\" grid): colour bands every "
+    "100 m x GDAL-compatible relief with cast shadows, 100 m / 20 m contours (sciviz-gbuf topo)",
+    "cn": "(cn) bird's-eye contour image: contour lines of the true height in the G-buffer, "
+    "constant width in pixels however far the ground",
+    "pr": "(pr) profile image from sz: ridges drawn where they hide the ground behind them",
+    "sh": "(sh) relief from the captured normals, sun azimuth 315°, altitude 45°",
+    "mx2": "(mx2) combination of (pr) and (sh)",
+    "mx4": "(mx4) combination of (pr), (cn), (sh) and colour bands (sciviz-gbuf birdseye)",
+    "sumi_e": "Fig. 13 sumi-e from (cn) and (sz): ridge lines, contour strokes and a wash below "
+    "the ridges, fading with distance and into the valleys",
+}
+
+
+def terrain_panels(window_size: tuple[int, int]) -> list[Panel]:
+    """The terrain figures on the bundled Jacksboro DEM: the plan-view map, the 1990 Fig. 12
+    bird's-eye panels (one capture) and the Fig. 13 sumi-e."""
+    dem = load_jacksboro_dem()
+    topo = topographic_map(dem, interval=20, major_interval=100, shadows=True)
+    gb = birdseye_gbuffer(dem, window_size=window_size, vert_exag=2.0)
+    bird = birdseye_panels(gb, background=(1.0, 1.0, 1.0))
+    ink = sumi_e(dem, window_size=window_size, elevation_angle=15.0, vert_exag=2.5)
+    titles = {"cn": "(cn) contour image", "pr": "(pr) profile image", "sh": "(sh) relief"}
+    titles |= {"mx2": "(mx2) pr + sh", "mx4": "(mx4) pr + cn + sh + bands"}
+    return [
+        ("topo", "topographic map (plan view)", topo),
+        *[(k, titles[k], bird[k]) for k in ("cn", "pr", "sh", "mx2", "mx4")],
+        ("sumi_e", "Fig. 13 sumi-e", ink),
+    ]
+
+
+def _terrain_figures(window_size: tuple[int, int]) -> list[_Figure]:
+    return [
+        _Figure(
+            "fig12",
+            "Terrain: Saito & Takahashi 1990 Figs. 11-13 on the Jacksboro DEM",
+            "A plan-view topographic map on the DEM's own grid (no rendering); then the terrain "
+            "rendered once from the south-east (vertical exaggeration 2) and its G-buffer "
+            "enhanced into the Fig. 12 bird's-eye maps; and a sumi-e from a lower view.",
+            partial(terrain_panels, window_size),
+            TERRAIN_CAPTIONS,
+            "DEM reading, rendering and filters",
+        )
+    ]
+
+
 def _write_figure(
     fig: _Figure, outdir: Path, window_size: tuple[int, int], progress_bar: bool
 ) -> None:
@@ -374,8 +424,9 @@ def run_demo(
     list of pathlib.Path
         Every file written: per scene one PNG per channel, a montage PNG and the G-buffer
         ``.npz``; then one PNG per panel of the 1990 Fig. 3 and Fig. 7 edge figures and of the
-        Fig. 5, Fig. 6 and Fig. 11 contour figures, with a montage each (``fig<n>_<key>.png``,
-        ``fig<n>_montage.png``); finally ``index.html``.
+        Fig. 5, Fig. 6 and Fig. 11 contour figures and of the terrain figures (a topographic
+        map, the Fig. 12 bird's-eye maps, the Fig. 13 sumi-e), with a montage each
+        (``fig<n>_<key>.png``, ``fig<n>_montage.png``); finally ``index.html``.
     """
     width, height = _check_window_size(window_size)
     out = Path(outdir)
@@ -384,6 +435,7 @@ def run_demo(
     for scene in scenes:
         _write_scene(scene, out, (width, height), progress_bar)
     figures = _edge_figures() + _contour_figures(max(16, min(width, height, CONTOUR_SIZE)))
+    figures += _terrain_figures((width, height))
     for fig in figures:
         _write_figure(fig, out, (width, height), progress_bar)
     files = [p for s in scenes for p in s.files] + [p for f in figures for _, p in f.images]

@@ -270,8 +270,9 @@ def test_run_demo_files(demo):
     pngs = [p for p in files if p.suffix == ".png"]
     # per scene 9 channels + shade + montage, + terrain elevation; then the edge figures:
     # Fig. 3 (7 panels + montage) and Fig. 7 (8 panels + montage); then the contour figures:
-    # Fig. 5 (5 panels + montage), Fig. 6 (3 + montage) and Fig. 11 (7 + montage)
-    assert len(pngs) == 2 * 11 + 1 + 8 + 9 + 6 + 4 + 8
+    # Fig. 5 (5 panels + montage), Fig. 6 (3 + montage) and Fig. 11 (7 + montage); then the
+    # terrain figure: topographic map, Fig. 12 cn, pr, sh, mx2, mx4, Fig. 13 sumi-e + montage
+    assert len(pngs) == 2 * 11 + 1 + 8 + 9 + 6 + 4 + 8 + 8
     for p in files:
         assert p.is_file() and p.stat().st_size > 0
     contour_figures = ("fig5_", "fig6_", "fig11_")
@@ -282,6 +283,8 @@ def test_run_demo_files(demo):
                 assert im.size[0] > WINDOW[0] and im.size[1] > WINDOW[1]
             elif p.name.startswith(contour_figures):  # square, as large as the window allows
                 assert im.size == (min(WINDOW), min(WINDOW))
+            elif p.name == "fig12_topo.png":  # the plan-view map: one pixel per DEM cell
+                assert im.size == (403, 344)
             else:
                 assert im.size == WINDOW
     page = (outdir / "index.html").read_text(encoding="utf-8")
@@ -322,7 +325,7 @@ def test_run_demo_edge_figures(demo):
         assert f"fig7_{key}.png" in names
     page = (outdir / "index.html").read_text(encoding="utf-8")
     assert "Fig. 3" in page and "Fig. 7" in page
-    assert page.count("Timings:") == 2 + 2 + 3  # scenes, edge and contour figures
+    assert page.count("Timings:") == 2 + 2 + 3 + 1  # scenes, edge, contour, terrain figures
 
     def grey(name):
         with Image.open(outdir / name) as im:
@@ -369,3 +372,25 @@ def test_run_demo_contour_figures(demo):
         assert im.mode == "RGB"
     cn = grey("fig11_cn.png")
     assert cn.min() == 0 and np.median(cn) == 255
+
+
+def test_run_demo_terrain_figure(demo):
+    """The terrain figure: the plan-view map on the DEM grid, the bird's-eye panels with ink on
+    coloured ground, the sumi-e mostly paper."""
+    outdir, _ = demo
+
+    def rgb(name):
+        with Image.open(outdir / name) as im:
+            return np.asarray(im.convert("RGB")).astype(int)
+
+    topo = rgb("fig12_topo.png")
+    assert len(np.unique(topo.reshape(-1, 3), axis=0)) > 50  # bands x relief x lines
+    mx4, pr = rgb("fig12_mx4.png"), rgb("fig12_pr.png")
+    ground = (pr < 250).any(axis=-1) | (mx4 != 255).any(axis=-1)
+    assert 0.1 < ground.mean() < 0.95  # the terrain, framed, on white
+    assert (pr.min(axis=-1) < 60).any()  # black profile lines
+    sumi = rgb("fig12_sumi_e.png")
+    assert np.median(sumi.mean(axis=-1)) > 200  # paper
+    assert sumi.min() < 120  # and ink
+    page = (outdir / "index.html").read_text(encoding="utf-8")
+    assert "Fig. 12" in page and "sumi-e" in page

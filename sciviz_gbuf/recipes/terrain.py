@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 import os
+import warnings
 from collections.abc import Sequence
 
 import numpy as np
@@ -177,10 +178,11 @@ def map_layers(
     """The layers of a plan-view map: ``ink`` (contours), ``light`` (relief factor, 1 on open
     flat ground) and the band options; see :func:`topographic_map`."""
     z = heights
-    valid = np.isfinite(z)
-    data = z[valid]
-    lo = float(data.min()) if data.size else 0.0
-    hi = float(data.max()) if data.size else 1.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN: no range
+        lo, hi = float(np.nanmin(z)), float(np.nanmax(z))
+    if not np.isfinite(lo):
+        lo, hi = 0.0, 1.0
     auto_minor, auto_major = nice_intervals(lo, hi)
     if interval is None and major_interval is None:
         interval, major_interval = auto_minor, auto_major
