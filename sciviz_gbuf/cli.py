@@ -388,7 +388,9 @@ def _add_topo(sub) -> None:
     )
     p.add_argument("--no-relief", action="store_true", help="no relief shading")
     p.add_argument("--shadows", action="store_true", help="darken cast shadows")
-    p.add_argument("--sky-view", action="store_true", help="darken cells that see less sky")
+    p.add_argument(
+        "--sky-view", action="store_true", help="darken cells that see less sky (slow: ~1 MPix/s)"
+    )
     _add_progress(p)
     p.set_defaults(func=_cmd_topo)
 

@@ -317,6 +317,7 @@ def topographic_map(
         Darken cells in the cast shadow of other terrain (rayshader's ``ray_shade``).
     sky_view : bool, default: False
         Darken cells that see less of the sky (valleys, pits; rayshader's ``ambient_shade``).
+        Slow: about 1 MPix/s (16 directions, 50 cells out), minutes for a large DEM.
     progress_bar : bool, default: False
         Show a progress bar.
 
