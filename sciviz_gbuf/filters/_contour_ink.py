@@ -95,13 +95,38 @@ def _spacing(q, g):
 
 
 @njit(inline="always", cache=True)
-def _family(x, g, q, a, cap, prm):
+def _reached(p, lo, hi, ext):
+    """1 if level ``p`` lies within the 3x3 neighbourhood's range ``(lo, hi]`` widened by
+    ``ext``, else 0: a level the surface comes near but never crosses (a summit just below it)
+    draws no line, however small ``|x - p| / g`` is. As in GDAL, a value equal to a level
+    counts as above it: ground lying exactly at a level's height (a sea at 0 m) is not
+    outlined by that level."""
+    return _ONE if (p > lo - ext) & (p <= hi + ext) else _Z
+
+
+@njit(inline="always", cache=True)
+def _reach(a, g, cover, prm):
+    """How far beyond the neighbourhood's range a line of profile ``a`` inks, in field units:
+    it inks up to ``a / b`` pixels (of ``g``) from the level, the range spans at least one
+    pixel each way, ``cover`` (the field's own gradient; = ``g`` unless the caller gave one)."""
+    return max(a / prm[LINE_B] * g - cover, _Z)
+
+
+@njit(inline="always", cache=True)
+def _family(x, g, q, a, cap, lo, hi, cover, prm):
     """Ink of the regular levels ``base + n q`` (Eq. 13-14): the nearest line and the one beyond
-    it, so antialiased lines that nearly touch still add up; plus the spacing ``q / g``."""
+    it, so antialiased lines that nearly touch still add up; plus the spacing ``q / g``. Levels
+    outside the neighbourhood's range (``lo``, ``hi``, see :func:`_reached`) draw nothing."""
     s = _spacing(q, g)
     r = (x - prm[BASE]) * (_ONE / q)  # loop-invariant reciprocal
-    frac = abs(r - np.floor(r + _H))
-    c = _line(frac * s, a, cap, prm) + _line((_ONE - frac) * s, a, cap, prm)
+    n0 = np.floor(r + _H)
+    d = r - n0
+    frac = abs(d)
+    near = prm[BASE] + n0 * q
+    far = near + (q if d >= _Z else -q)
+    ext = _reach(a, g, cover, prm)
+    c = _line(frac * s, a, cap, prm) * _reached(near, lo, hi, ext)
+    c += _line((_ONE - frac) * s, a, cap, prm) * _reached(far, lo, hi, ext)
     return min(c, _ONE), s
 
 
@@ -127,35 +152,39 @@ def _finite_ink(v):
 
 
 @njit(inline="always", cache=True)
-def regular_ink(x, g, prm):
-    """Regular contours (Eq. 10-15), with an optional major family that never thins out."""
-    c, s = _family(x, g, prm[Q], prm[LINE_A], prm[LINE_CAP], prm)
+def regular_ink(x, g, lo, hi, cover, prm):
+    """Regular contours (Eq. 10-15), with an optional major family that never thins out;
+    ``lo``, ``hi``: the range of the 3x3 neighbourhood, ``cover``: the field's own gradient."""
+    c, s = _family(x, g, prm[Q], prm[LINE_A], prm[LINE_CAP], lo, hi, cover, prm)
     v = _flat_dense(c, g, s, prm)
     qm = prm[MAJOR_Q]
     if qm > 0:
-        cm, _ = _family(x, g, qm, prm[MAJOR_A], prm[MAJOR_CAP], prm)
+        cm, _ = _family(x, g, qm, prm[MAJOR_A], prm[MAJOR_CAP], lo, hi, cover, prm)
         v = max(v, _flat(cm, g, prm))
     return _finite_ink(v)
 
 
 @njit(inline="always", cache=True)
-def levels_ink(x, g, prm):
-    """Contours at the sorted levels ``prm[NPRM:]`` (Eq. 7 for the two levels around ``x``)."""
+def levels_ink(x, g, lo, hi, cover, prm):
+    """Contours at the sorted levels ``prm[NPRM:]`` (Eq. 7 for the two levels around ``x``),
+    each only if the 3x3 neighbourhood's range ``lo``, ``hi`` reaches it."""
     lv = prm[NPRM:]
     n = lv.shape[0]
-    lo, hi = 0, n
-    while lo < hi:  # first level > x
-        mid = (lo + hi) >> 1
+    i0, i1 = 0, n
+    while i0 < i1:  # first level > x
+        mid = (i0 + i1) >> 1
         if lv[mid] <= x:
-            lo = mid + 1
+            i0 = mid + 1
         else:
-            hi = mid
-    below = lv[lo - 1] if lo > 0 else -_BIG
-    above = lv[lo] if lo < n else _BIG
+            i1 = mid
+    below = lv[i0 - 1] if i0 > 0 else -_BIG
+    above = lv[i0] if i0 < n else _BIG
     a, cap = prm[LINE_A], prm[LINE_CAP]
     gg = max(g, _TINY)
-    c = _line((x - below) / gg, a, cap, prm) + _line((above - x) / gg, a, cap, prm)
-    s = _spacing(above - below, g) if (lo > 0) & (lo < n) else _BIG
+    ext = _reach(a, g, cover, prm)
+    c = _line((x - below) / gg, a, cap, prm) * _reached(below, lo, hi, ext)
+    c += _line((above - x) / gg, a, cap, prm) * _reached(above, lo, hi, ext)
+    s = _spacing(above - below, g) if (i0 > 0) & (i0 < n) else _BIG
     return _finite_ink(_flat_dense(min(c, _ONE), g, s, prm))
 
 

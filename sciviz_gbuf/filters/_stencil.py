@@ -99,7 +99,7 @@ SOBEL, SECOND, C1, DIAG_DEPTH, NORMALIZE, SUPPRESS, CONTOUR, LEVELS, HATCH = ran
 
 @njit(inline="always", cache=True)
 def _grad(x, a, b, c, d, e, f, g, h, k, aux, prm):
-    """The gradient magnitude of the contour codes, or the caller's own (k > 0) from aux.
+    """The gradient magnitude of the contour codes (the caller's own, k > 0, comes in aux).
 
     Eq. 9 is kept for its robustness at ridges and kinks, where central differences vanish,
     but on a plane it reads ``|grad| (cos + sin / 2)`` of the angle to the nearer axis, up to
@@ -111,22 +111,34 @@ def _grad(x, a, b, c, d, e, f, g, h, k, aux, prm):
     gy = abs((f - a) + _TWO * (g - b) + (h - c))
     r = min(gx, gy) / max(gx, gy, _TINY)
     iso = _A0 + r * (_A1 + r * (_A2 + r * (_A3 + r * _A4)))
-    return aux if k > 0 else _c1(x, a, b, c, d, e, f, g, h, k, aux, prm) * iso
+    return _c1(x, a, b, c, d, e, f, g, h, k, aux, prm) * iso
+
+
+@njit(inline="always", cache=True)
+def _range(x, a, b, c, d, e, f, g, h):
+    """Smallest and largest value of the 3x3 neighbourhood (after the border rule)."""
+    lo = min(min(min(a, b), min(c, d)), min(min(e, f), min(g, min(h, x))))
+    hi = max(max(max(a, b), max(c, d)), max(max(e, f), max(g, max(h, x))))
+    return lo, hi
 
 
 @njit(inline="always", cache=True)
 def _contour(x, a, b, c, d, e, f, g, h, k, aux, prm):
-    return regular_ink(x, _grad(x, a, b, c, d, e, f, g, h, k, aux, prm), prm)
+    lo, hi = _range(x, a, b, c, d, e, f, g, h)
+    own = _grad(x, a, b, c, d, e, f, g, h, k, aux, prm)
+    return regular_ink(x, aux if k > 0 else own, lo, hi, own, prm)
 
 
 @njit(inline="always", cache=True)
 def _levels(x, a, b, c, d, e, f, g, h, k, aux, prm):
-    return levels_ink(x, _grad(x, a, b, c, d, e, f, g, h, k, aux, prm), prm)
+    lo, hi = _range(x, a, b, c, d, e, f, g, h)
+    own = _grad(x, a, b, c, d, e, f, g, h, k, aux, prm)
+    return levels_ink(x, aux if k > 0 else own, lo, hi, own, prm)
 
 
 @njit(inline="always", cache=True)
 def _hatch(x, a, b, c, d, e, f, g, h, k, aux, prm):
-    return hatch_ink(x, _grad(x, a, b, c, d, e, f, g, h, k, aux, prm), prm)
+    return hatch_ink(x, aux if k > 0 else _grad(x, a, b, c, d, e, f, g, h, k, aux, prm), prm)
 
 
 @njit(inline="always", cache=True)
