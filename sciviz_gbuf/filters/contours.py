@@ -115,6 +115,10 @@ def contour_lines(
 
     Each pixel gets the ink of the line profile ``f1(|s - p_k| / g)`` for its nearest levels,
     where ``g`` is the Eq. 9 gradient, then the flat-region and dense-region blends ``f_g``.
+    A level is drawn only where the field reaches it: within the range of the pixel's 3x3
+    neighbourhood (widened by how far a wide line reaches beyond one pixel), so a summit just
+    below a level gets no line on its top; as in GDAL, a value equal to a level counts as
+    above it. The lines then lie within 1 px of ``gdal_contour``'s (tested).
 
     Parameters
     ----------
