@@ -14,6 +14,7 @@ from __future__ import annotations
 import os
 import struct
 import zlib
+from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -53,37 +54,62 @@ def _filtered_block(a: np.ndarray, r0: int, r1: int) -> bytes:
     return out.tobytes()
 
 
-def encode_png(image: np.ndarray, *, level: int = 1, threads: int | None = None) -> bytes:
-    """PNG bytes of a uint8 image ``(H, W)``, ``(H, W, 2)``, ``(H, W, 3)`` or ``(H, W, 4)``;
-    ``level`` 0-3 (ISA-L's range; zlib's levels above 3 are not used)."""
+def _adler32_combine(a1: int, a2: int, len2: int) -> int:
+    """Adler-32 of two byte strings joined, from theirs (zlib's ``adler32_combine``)."""
+    base = 65521
+    rem = len2 % base
+    s1 = a1 & 0xFFFF
+    s2 = (rem * s1) % base
+    s1 = (s1 + (a2 & 0xFFFF) + base - 1) % base
+    s2 = (s2 + ((a1 >> 16) & 0xFFFF) + ((a2 >> 16) & 0xFFFF) + base - rem) % base
+    return s1 | (s2 << 16)
+
+
+def _idat_parts(a: np.ndarray, level: int, threads: int | None) -> Iterator[bytes]:
+    """The PNG's IDAT chunks, in order: the zlib header, one chunk per block of rows (filtered,
+    deflated and CRC'd on the worker threads, never joined into one big string), the Adler-32.
+    """
+    h = a.shape[0]
+    starts = list(range(0, h, _BLOCK_ROWS))
+    lvl = min(max(level, 0), 3)
+
+    def deflate(r0: int) -> tuple[bytes, int, int]:
+        raw = _filtered_block(a, r0, min(r0 + _BLOCK_ROWS, h))
+        comp = _deflate.compressobj(lvl, zlib.DEFLATED, -15)
+        mode = _deflate.Z_FINISH if r0 == starts[-1] else _deflate.Z_FULL_FLUSH
+        data = comp.compress(raw) + comp.flush(mode)
+        return _chunk(b"IDAT", data), _deflate.adler32(raw), len(raw)
+
+    n = threads or min(len(starts), os.cpu_count() or 1)
+    yield _chunk(b"IDAT", b"\x78\x01")
+    adler = 1
+    with ThreadPoolExecutor(max_workers=max(n, 1)) as pool:
+        for chunk, part_adler, size in pool.map(deflate, starts):
+            adler = _adler32_combine(adler, part_adler, size)
+            yield chunk
+    yield _chunk(b"IDAT", struct.pack(">I", adler))
+
+
+def _pieces(image: np.ndarray, level: int, threads: int | None) -> Iterator[bytes]:
     a = np.ascontiguousarray(image, dtype=np.uint8)
     if a.ndim == 2:
         a = a[..., None]
     h, w, c = a.shape
-    starts = list(range(0, h, _BLOCK_ROWS))
-
-    def deflate(r0: int) -> tuple[bytes, bytes]:
-        raw = _filtered_block(a, r0, min(r0 + _BLOCK_ROWS, h))
-        comp = _deflate.compressobj(min(max(level, 0), 3), zlib.DEFLATED, -15)
-        last = r0 == starts[-1]
-        mode = _deflate.Z_FINISH if last else _deflate.Z_FULL_FLUSH
-        return raw, comp.compress(raw) + comp.flush(mode)
-
-    n = threads or min(len(starts), os.cpu_count() or 1)
-    with ThreadPoolExecutor(max_workers=max(n, 1)) as pool:
-        parts = list(pool.map(deflate, starts))
-    adler = 1
-    for raw, _ in parts:
-        adler = _deflate.adler32(raw, adler)
-    stream = b"".join([b"\x78\x01", *(p for _, p in parts), struct.pack(">I", adler)])
     header = struct.pack(">IIBBBBB", w, h, 8, _COLOUR_TYPE[c], 0, 0, 0)
-    idat = b"".join(
-        _chunk(b"IDAT", stream[i : i + (1 << 24)]) for i in range(0, len(stream), 1 << 24)
-    )
-    return b"\x89PNG\r\n\x1a\n" + _chunk(b"IHDR", header) + idat + _chunk(b"IEND", b"")
+    yield b"\x89PNG\r\n\x1a\n" + _chunk(b"IHDR", header)
+    yield from _idat_parts(a, level, threads)
+    yield _chunk(b"IEND", b"")
 
 
-def write_png_fast(path: Path, image: np.ndarray) -> Path:
-    """Write :func:`encode_png` bytes to ``path``."""
-    path.write_bytes(encode_png(image))
+def encode_png(image: np.ndarray, *, level: int = 1, threads: int | None = None) -> bytes:
+    """PNG bytes of a uint8 image ``(H, W)``, ``(H, W, 2)``, ``(H, W, 3)`` or ``(H, W, 4)``;
+    ``level`` 0-3 (ISA-L's range; zlib's levels above 3 are not used)."""
+    return b"".join(_pieces(image, level, threads))
+
+
+def write_png_fast(path: Path, image: np.ndarray, *, level: int = 1) -> Path:
+    """Write the PNG of :func:`encode_png` to ``path`` chunk by chunk, as blocks finish."""
+    with open(path, "wb") as f:
+        for piece in _pieces(image, level, None):
+            f.write(piece)
     return path

@@ -300,8 +300,13 @@ def test_cli_birdseye_and_sumi_e(tmp_path, shared_data):
         main(["birdseye", str(src), "-o", str(tmp_path / "x.png"), "--elevation-angle", "95"])
 
 
-def test_large_png_encoder_round_trip():
-    from sciviz_gbuf._png import encode_png
+def test_large_png_encoder_round_trip(tmp_path):
+    import zlib
+
+    from sciviz_gbuf._png import _adler32_combine, encode_png, write_png_fast
+
+    a, b = b"sciviz" * 9999, bytes(range(256)) * 77
+    assert _adler32_combine(zlib.adler32(a), zlib.adler32(b), len(b)) == zlib.adler32(a + b)
 
     rng = np.random.default_rng(1)
     for shape in [(700, 33, 4), (513, 300, 3), (300, 257)]:
@@ -309,3 +314,5 @@ def test_large_png_encoder_round_trip():
         a[::7] = a[0]  # some repeated rows
         back = np.asarray(Image.open(io.BytesIO(encode_png(a))))
         np.testing.assert_array_equal(back, a)
+        path = write_png_fast(tmp_path / "a.png", a)
+        np.testing.assert_array_equal(np.asarray(Image.open(path)), a)

@@ -246,8 +246,14 @@ def hillshade(
         raise InputError(f"algorithm: expected one of {sorted(_ALGORITHMS)}, got {algorithm!r}")
     if variant not in _VARIANTS:
         raise InputError(f"variant: expected one of {sorted(_VARIANTS)}, got {variant!r}")
-    z32 = z.astype(np.float32)  # always a copy: the input is never modified
-    z32[~np.isfinite(z32)] = np.nan
+    # The kernel only reads: float32 input without infinities is used as it is; anything
+    # else is copied first, so the input is never modified.
+    z32 = np.ascontiguousarray(z, dtype=np.float32)
+    infinite = np.isinf(z32).any()
+    if infinite or mask is not None:
+        z32 = z32.copy() if z32 is z or np.shares_memory(z32, z) else z32
+        if infinite:
+            np.putmask(z32, np.isinf(z32), np.float32(np.nan))
     if mask is not None:
         m = np.asarray(mask, dtype=bool)
         if m.shape != z.shape:

@@ -38,11 +38,17 @@ class RawDEM:
     unit_metres: float = 1.0
 
 
-def _blank_nodata(values: np.ndarray, nodata: float | None) -> np.ndarray:
-    """Float32 copy of ``values`` with NaN where they equal ``nodata``."""
-    heights = np.asarray(values, dtype=np.float32).copy()
+def _blank_nodata(values: np.ndarray, nodata: float | None, *, owned: bool = False) -> np.ndarray:
+    """Float32 ``values`` with NaN where they equal ``nodata``: a copy, or ``values`` itself
+    changed in place when ``owned`` (a fresh array of this reader) and already float32."""
+    values = np.asarray(values)
+    if owned and values.dtype == np.float32:
+        heights = values
+    else:
+        heights = values.astype(np.float32)
     if nodata is not None and np.isfinite(nodata):
-        heights[np.asarray(values) == nodata] = np.nan
+        # Compared in the source type: a float32 cast could merge nodata with a close height.
+        np.putmask(heights, values == nodata, np.float32(np.nan))
     return heights
 
 
@@ -192,7 +198,7 @@ def read_geotiff(path: Path) -> RawDEM:
             UserWarning,
             stacklevel=3,
         )
-    heights = _blank_nodata(values, nodata)
+    heights = _blank_nodata(values, nodata, owned=True)
     return RawDEM(heights, tuple(map(float, transform)) if transform else None, crs, geographic)
 
 

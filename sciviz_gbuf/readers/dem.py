@@ -262,7 +262,8 @@ def read_dem(
             f"{name}: spacing= is for sources without a georeference; this one has "
             f"transform {raw.transform}"
         )
-    return _finish(raw, name, spacing=spacing, nodata=nodata, geographic=geographic)
+    owned = isinstance(source, (str, os.PathLike))  # a fresh array read from a file
+    return _finish(raw, name, spacing=spacing, nodata=nodata, geographic=geographic, owned=owned)
 
 
 def _is_dataarray(obj: Any) -> bool:
@@ -343,8 +344,11 @@ def _read_dataarray(da: Any, name: str) -> tuple[RawDEM, float | None]:
     return RawDEM(values, transform, crs, geographic), nodata
 
 
-def _heights(values: np.ndarray, name: str | None, nodata: float | None) -> np.ndarray:
-    """Check a 2-D numeric array; float32 copy with NaN at ``nodata`` and non-finite values."""
+def _heights(
+    values: np.ndarray, name: str | None, nodata: float | None, owned: bool = False
+) -> np.ndarray:
+    """Check a 2-D numeric array; float32 with NaN at ``nodata`` and non-finite values: a copy,
+    or ``values`` itself when ``owned`` (just read from a file) and already float32."""
     what = name or "array"
     if values.ndim != 2 or min(values.shape) == 0:
         raise InputError(
@@ -352,10 +356,11 @@ def _heights(values: np.ndarray, name: str | None, nodata: float | None) -> np.n
         )
     if not (np.issubdtype(values.dtype, np.number) and not np.iscomplexobj(values)):
         raise InputError(f"{what}: expected real numeric heights, got dtype {values.dtype}")
-    heights = np.array(values, dtype=np.float32)
+    heights = values if owned and values.dtype == np.float32 else values.astype(np.float32)
     if nodata is not None:
-        heights[np.asarray(values) == nodata] = np.nan
-    heights[~np.isfinite(heights)] = np.nan
+        np.putmask(heights, values == nodata, np.float32(np.nan))
+    if np.isinf(heights).any():
+        np.putmask(heights, np.isinf(heights), np.float32(np.nan))
     return heights
 
 
@@ -377,8 +382,8 @@ def _looks_geographic(transform: GeoTransform, shape: tuple[int, int]) -> bool:
     return small and min(xs) >= -180 and max(xs) <= 360 and min(ys) >= -90 and max(ys) <= 90
 
 
-def _finish(raw: RawDEM, name: str | None, *, spacing, nodata, geographic) -> DEM:
-    heights = _heights(np.asarray(raw.heights), name, nodata)
+def _finish(raw: RawDEM, name: str | None, *, spacing, nodata, geographic, owned=False) -> DEM:
+    heights = _heights(np.asarray(raw.heights), name, nodata, owned)
     shape = heights.shape
     if raw.transform is None:
         if geographic:
