@@ -316,3 +316,19 @@ def test_large_png_encoder_round_trip(tmp_path):
         np.testing.assert_array_equal(back, a)
         path = write_png_fast(tmp_path / "a.png", a)
         np.testing.assert_array_equal(np.asarray(Image.open(path)), a)
+
+
+def test_auto_intervals_follow_the_slope():
+    """Majors at least 6 px apart on the median slope: a steep small grid gets few lines."""
+    from sciviz_gbuf.recipes.terrain import typical_slope
+
+    z = plane_dem((60, 80), east=0.3, north=0.4, spacing=10.0)  # 5 m per pixel
+    assert typical_slope(z) == pytest.approx(5.0, rel=1e-5)
+    lo, hi = float(z.min()), float(z.max())
+    assert nice_intervals(lo, hi) == (10.0, 50.0)  # by the range alone: lines 10 px apart
+    assert nice_intervals(lo, hi, slope=typical_slope(z)) == (10.0, 50.0)
+    # 20 m per pixel: 6 px is 120 m, rounded up to 200
+    assert nice_intervals(lo, hi, slope=20.0) == (40.0, 200.0)
+    m = sg.topographic_map(read_dem(z * 4, spacing=10.0), bands=False, relief=False)
+    inked = (m[..., :3] < 200).any(axis=-1).mean()
+    assert 0.02 < inked < 0.5  # lines, not solid ink

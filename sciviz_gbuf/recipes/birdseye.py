@@ -31,6 +31,7 @@ from .terrain import (
     lit,
     nice_intervals,
     relief_light,
+    typical_slope,
 )
 
 __all__ = [
@@ -168,7 +169,7 @@ def birdseye_layers(
     valid = np.isfinite(elev)
     lo = float(np.nanmin(elev)) if valid.any() else 0.0
     hi = float(np.nanmax(elev)) if valid.any() else 1.0
-    minor, major = nice_intervals(lo, hi)
+    minor, major = nice_intervals(lo, hi, slope=typical_slope(elev) / k)
     if interval is None and major_interval is None:
         interval, major_interval = minor, major
     elif interval is None:

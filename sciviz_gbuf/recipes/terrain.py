@@ -27,7 +27,7 @@ from ..filters import contour_lines, hillshade
 from ..filters.bands import band_tables
 from ..readers import DEM, read_dem
 
-__all__ = ["as_dem", "map_layers", "nice_intervals", "topographic_map"]
+__all__ = ["as_dem", "map_layers", "nice_intervals", "topographic_map", "typical_slope"]
 
 #: Dark brown, the colour of contour lines on most topographic maps.
 CONTOUR_COLOR = (0.36, 0.20, 0.08)
@@ -39,10 +39,21 @@ def as_dem(dem: DEM | str | os.PathLike | np.ndarray) -> DEM:
     return dem if isinstance(dem, DEM) else read_dem(dem)
 
 
-def nice_intervals(lo: float, hi: float, *, majors: int = 8) -> tuple[float, float]:
+def _round_up(value: float) -> float:
+    """The smallest of 1, 2, 2.5, 5 times a power of ten that is >= ``value`` (> 0)."""
+    e = math.floor(math.log10(value))
+    return min(m * 10.0**k for k in (e, e + 1) for m in (1.0, 2.0, 2.5, 5.0, 10.0)
+               if m * 10.0**k >= value * (1 - 1e-12))  # fmt: skip
+
+
+def nice_intervals(
+    lo: float, hi: float, *, majors: int = 8, slope: float | None = None, spacing: float = 6.0
+) -> tuple[float, float]:
     """Minor and major contour intervals for heights in ``[lo, hi]``: the round major interval
     (1, 2, 2.5 or 5 times a power of ten) giving closest to ``majors`` lines (in ratio), and
-    five minors to each major.
+    five minors to each major. With ``slope`` (a typical height change per pixel), majors are
+    at least ``spacing`` pixels apart there: steep or coarse grids get fewer lines rather than
+    solid ink.
 
     >>> nice_intervals(250.0, 1150.0)
     (20.0, 100.0)
@@ -53,7 +64,25 @@ def nice_intervals(lo: float, hi: float, *, majors: int = 8) -> tuple[float, flo
     e = math.floor(math.log10(span / majors))
     candidates = [m * 10.0**k for k in (e - 1, e, e + 1) for m in (1.0, 2.0, 2.5, 5.0)]
     major = min(candidates, key=lambda c: abs(math.log(span / c / majors)))
+    if slope is not None and math.isfinite(slope) and slope > 0:
+        major = max(major, _round_up(slope * spacing))
     return major / 5.0, major
+
+
+def typical_slope(z: np.ndarray, samples: int = 1_000_000) -> float:
+    """Median height change per pixel (gradient magnitude) of a height image where it is not
+    flat (a sea or a lake would outvote the land), from about ``samples`` pixels on a regular
+    lattice; NaN without such a pixel."""
+    h, w = z.shape
+    if h < 2 or w < 2:
+        return float("nan")
+    k = max(1, int(math.sqrt(h * w / samples)))
+    base = z[: h - 1 : k, : w - 1 : k]
+    gx = z[: h - 1 : k, 1::k][:, : base.shape[1]] - base
+    gy = z[1::k, : w - 1 : k][: base.shape[0]] - base
+    g = np.hypot(gx, gy)
+    g = g[np.isfinite(g) & (g > 0)]
+    return float(np.median(g)) if g.size else float("nan")
 
 
 def _fill_ring(z: np.ndarray) -> np.ndarray:
@@ -183,7 +212,7 @@ def map_layers(
         lo, hi = float(np.nanmin(z)), float(np.nanmax(z))
     if not np.isfinite(lo):
         lo, hi = 0.0, 1.0
-    auto_minor, auto_major = nice_intervals(lo, hi)
+    auto_minor, auto_major = nice_intervals(lo, hi, slope=typical_slope(z))
     if interval is None and major_interval is None:
         interval, major_interval = auto_minor, auto_major
     elif interval is None:
@@ -290,8 +319,9 @@ def topographic_map(
         Anything :func:`~sciviz_gbuf.readers.read_dem` reads (arrays: 1 m pixels).
     interval, major_interval : float, optional
         Minor and major contour intervals in height units. Default: round intervals giving
-        about eight majors over the height range, five minors to a major
-        (:func:`nice_intervals`); ``major_interval`` alone implies minors at a fifth of it.
+        about eight majors over the height range, but majors at least 6 pixels apart on the
+        median slope, five minors to a major (:func:`nice_intervals`); ``major_interval``
+        alone implies minors at a fifth of it.
     contours : bool, default: True
         Draw contour lines at all.
     width, major_width : float, default: 1, 2
