@@ -133,8 +133,11 @@ def test_nice_intervals_are_round(lo, span):
 
 def test_bad_parameters():
     z = plane_dem()
-    with pytest.raises(InputError, match="bands"):
-        sg.topographic_map(z, bands="rainbow")
+    for bad in ("rainbow", [1, "x"], [], [0, np.inf], object()):
+        with pytest.raises(InputError, match="bands"):
+            sg.topographic_map(z, bands=bad)
+    with pytest.raises(InputError, match="cmap"):
+        sg.topographic_map(z, cmap="no-such-map")
     with pytest.raises(InputError, match="contour_color"):
         sg.topographic_map(z, contour_color=(2, 0, 0))
     with pytest.raises(InputError, match="interval"):
@@ -332,3 +335,23 @@ def test_auto_intervals_follow_the_slope():
     m = sg.topographic_map(read_dem(z * 4, spacing=10.0), bands=False, relief=False)
     inked = (m[..., :3] < 200).any(axis=-1).mean()
     assert 0.02 < inked < 0.5  # lines, not solid ink
+
+
+@given(
+    st.integers(1, 12),
+    st.integers(1, 12),
+    st.floats(-1e4, 1e4),
+    st.floats(1e-3, 1e3),
+    st.integers(0, 2**32 - 1),
+)
+@settings(max_examples=40, deadline=None)
+def test_odd_grids_give_a_map(h, w, offset, scale, seed):
+    """Tiny, flat, noisy grids with NaN and inf: always an (H, W, 4) map, transparent exactly
+    at the non-finite cells, never an exception from deep inside."""
+    rng = np.random.default_rng(seed)
+    z = (offset + scale * rng.standard_normal((h, w))).astype(np.float32)
+    z[rng.random((h, w)) < 0.2] = np.nan
+    z[rng.random((h, w)) < 0.05] = np.inf
+    m = sg.topographic_map(read_dem(z, spacing=5.0), shadows=True)
+    assert m.shape == (h, w, 4) and m.dtype == np.uint8
+    np.testing.assert_array_equal(m[..., 3] == 0, ~np.isfinite(z))

@@ -152,7 +152,8 @@ def _flat_shade(**opts) -> float:
 
 
 def _check_bands(bands, major: float):
-    """``bands`` -> ``(interval, levels, continuous)`` for :func:`color_bands`, or None."""
+    """``bands`` -> the ``interval=``/``levels=`` options of the band colours (empty for a
+    continuous ramp), or None for no bands."""
     if bands is False or bands is None:
         return None
     if bands is True:
@@ -165,11 +166,20 @@ def _check_bands(bands, major: float):
             f"got {bands!r}"
         )
     if np.ndim(bands) == 0:
-        v = float(bands)
+        try:
+            v = float(bands)
+        except (TypeError, ValueError):
+            v = float("nan")
         if not (math.isfinite(v) and v > 0):
             raise InputError(f"bands: expected an interval > 0, got {bands!r}")
         return {"interval": v}
-    return {"levels": np.asarray(bands, dtype=np.float64)}
+    try:
+        levels = np.asarray(bands, dtype=np.float64).ravel()
+    except (TypeError, ValueError):
+        levels = np.array([np.nan])
+    if levels.size == 0 or not np.isfinite(levels).all():
+        raise InputError(f"bands: expected finite band edges, got {bands!r}")
+    return {"levels": levels}
 
 
 def _colour(value: Sequence[float], name: str) -> np.ndarray:
@@ -204,8 +214,10 @@ def map_layers(
     vmax: float | None = None,
     bar=None,
 ) -> dict[str, np.ndarray | None]:
-    """The layers of a plan-view map: ``ink`` (contours), ``light`` (relief factor, 1 on open
-    flat ground) and the band options; see :func:`topographic_map`."""
+    """The layers of a plan-view map, see :func:`topographic_map`: ``ink`` (contours or None),
+    ``sh`` (hillshade), ``flat`` (its value on flat ground), ``lit`` (cast shadows), ``sky``
+    (sky view) when asked for, and ``tables`` (the band colours' kernel arguments, or None).
+    Every option is checked before the work starts."""
     z = heights
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN: no range
@@ -217,9 +229,21 @@ def map_layers(
         interval, major_interval = auto_minor, auto_major
     elif interval is None:
         interval = float(major_interval) / 5.0
-    layers: dict[str, object] = {"lo": lo if vmin is None else vmin}
-    layers["hi"] = hi if vmax is None else vmax
-    layers["ink"] = None
+    band_interval = major_interval if major_interval is not None else 5.0 * float(interval)
+    opts = _check_bands(bands, band_interval)
+    layers: dict[str, object] = {"tables": None, "ink": None, "relief": relief}
+    if opts is not None:
+        layers["tables"] = band_tables(
+            np.zeros(1, np.float32),  # unused: the range is given
+            interval=opts.get("interval"),
+            levels=opts.get("levels"),
+            base=0.0,
+            cmap=cmap,
+            vmin=lo if vmin is None else vmin,
+            vmax=hi if vmax is None else vmax,
+            sea_level=sea_level,
+            sea_cmap=None,
+        )
     if contours:
         layers["ink"] = contour_lines(
             z,
@@ -231,7 +255,6 @@ def map_layers(
         )
     if bar is not None:
         bar.step("relief")
-    layers["relief"] = relief
     if relief:
         opts = {"azimuth": azimuth, "altitude": altitude, "z_factor": z_factor, "variant": variant}
         layers["sh"] = hillshade(_fill_ring(z), dx=dx, dy=dy, **opts)
@@ -246,9 +269,6 @@ def map_layers(
             from ..filters import sky_view as sky_view_factor
 
             layers["sky"] = sky_view_factor(z, dx=dx, dy=dy, z_factor=z_factor)
-    band_interval = major_interval if major_interval is not None else 5.0 * float(interval)
-    layers["bands"] = _check_bands(bands, band_interval)
-    layers["cmap"], layers["sea_level"] = cmap, sea_level
     return layers
 
 
@@ -256,23 +276,24 @@ def composite(layers: dict, heights: np.ndarray, colour: np.ndarray) -> np.ndarr
     """The map's layers into one RGBA uint8 image in one fused pass (no float image of the
     whole map is made)."""
     z = np.ascontiguousarray(heights, dtype=np.float32)
-    opts = layers["bands"]
-    tables = band_tables(
-        np.zeros(1, np.float32),  # unused: the range is known
-        interval=(opts or {}).get("interval"),
-        levels=(opts or {}).get("levels"),
-        base=0.0,
-        cmap=layers["cmap"],
-        vmin=layers["lo"],
-        vmax=layers["hi"],
-        sea_level=layers["sea_level"],
-        sea_cmap=None,
-    )
+    tables = layers["tables"]
+    if tables is None:  # no bands: white paper (the kernel ignores the tables)
+        tables = band_tables(
+            np.zeros(1, np.float32),
+            interval=None,
+            levels=None,
+            base=0.0,
+            cmap=None,
+            vmin=0.0,
+            vmax=1.0,
+            sea_level=None,
+            sea_cmap=None,
+        )
     empty = np.zeros((0, 0), np.float32)
     out = np.empty((*z.shape, 4), dtype=np.uint8)
     _bk.map_image(
         z,
-        opts is not None,
+        layers["tables"] is not None,
         *tables,
         bool(layers["relief"]),
         layers.get("sh", empty),
