@@ -1,7 +1,8 @@
 """A plan-view topographic map of the bundled Jacksboro DEM, as PNG and georeferenced GeoTIFF.
 
 Colour bands per major interval, a GDAL-compatible relief with cast shadows and a sky-view term,
-and major/minor contour lines whose minors thin out on steep slopes (Saito & Takahashi 1990,
+and major/minor contour lines (automatic intervals: 200 m / 40 m here, majors at least 6 px
+apart on the median slope) whose minors thin out on steep slopes (Saito & Takahashi 1990,
 Fig. 11 ``mx3``). The GeoTIFF carries the DEM's CRS and geotransform, so GIS software places it.
 
 Usage: ``python examples/terrain_topographic_map.py [outdir]`` (default ``examples/output``).
@@ -21,7 +22,7 @@ def main(outdir: Path) -> list[Path]:
     """Write the map (PNG + GeoTIFF) and a montage of its variants to ``outdir``."""
     outdir.mkdir(parents=True, exist_ok=True)
     dem = load_jacksboro_dem()  # 3" WGS84 grid: pixel sizes in metres from the latitude
-    full = sg.topographic_map(dem, interval=20, major_interval=100, shadows=True, sky_view=True)
+    full = sg.topographic_map(dem, shadows=True, sky_view=True)  # automatic intervals
     written = [write_png(outdir / "topo_map.png", full)]
     if _has_rasterio():
         written.append(write_geotiff(outdir / "topo_map.tif", full, dem=dem))

@@ -259,8 +259,9 @@ def _contour_figures(size: int) -> list[_Figure]:
 
 
 TERRAIN_CAPTIONS = {
-    "topo": "topographic map (Fig. 11 mx3 on the DEM's own 3\" grid): colour bands every "
-    "100 m x GDAL-compatible relief with cast shadows, 100 m / 20 m contours (sciviz-gbuf topo)",
+    "topo": "topographic map (Fig. 11 mx3 on the DEM's own 3\" grid, sciviz-gbuf topo): colour "
+    "bands every 200 m x GDAL-compatible relief with cast shadows, 200 m / 40 m contours "
+    "(automatic: majors at least 6 px apart on the median slope)",
     "cn": "(cn) bird's-eye contour image: contour lines of the true height in the G-buffer, "
     "constant width in pixels however far the ground",
     "pr": "(pr) profile image from sz: ridges drawn where they hide the ground behind them",
@@ -276,7 +277,7 @@ def terrain_panels(window_size: tuple[int, int]) -> list[Panel]:
     """The terrain figures on the bundled Jacksboro DEM: the plan-view map, the 1990 Fig. 12
     bird's-eye panels (one capture) and the Fig. 13 sumi-e."""
     dem = load_jacksboro_dem()
-    topo = topographic_map(dem, interval=20, major_interval=100, shadows=True)
+    topo = topographic_map(dem, shadows=True)
     gb = birdseye_gbuffer(dem, window_size=window_size, vert_exag=2.0)
     bird = birdseye_panels(gb, background=(1.0, 1.0, 1.0))
     ink = sumi_e(dem, window_size=window_size, elevation_angle=15.0, vert_exag=2.5)
