@@ -28,10 +28,9 @@ from .terrain import (
     _check_bands,
     _colour,
     as_dem,
+    contour_intervals,
     lit,
-    nice_intervals,
     relief_light,
-    typical_slope,
 )
 
 __all__ = [
@@ -167,13 +166,9 @@ def birdseye_layers(
     mask = gb.mask
     elev = np.where(mask, gb.scalars["elevation"], np.float32(np.nan))
     valid = np.isfinite(elev)
-    lo = float(np.nanmin(elev)) if valid.any() else 0.0
-    hi = float(np.nanmax(elev)) if valid.any() else 1.0
-    minor, major = nice_intervals(lo, hi, slope=typical_slope(elev) / k)
-    if interval is None and major_interval is None:
-        interval, major_interval = minor, major
-    elif interval is None:
-        interval = float(major_interval) / 5.0
+    lo, hi, interval, major_interval = contour_intervals(
+        elev, interval, major_interval, pixels_per_sample=1.0 / k
+    )
     cn = np.zeros_like(elev)
     if contours:
         cn = contour_lines(

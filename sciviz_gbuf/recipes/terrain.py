@@ -85,6 +85,30 @@ def typical_slope(z: np.ndarray, samples: int = 1_000_000) -> float:
     return float(np.median(g)) if g.size else float("nan")
 
 
+def contour_intervals(
+    z: np.ndarray,
+    interval: float | None,
+    major_interval: float | None,
+    *,
+    pixels_per_sample: float = 1.0,
+) -> tuple[float, float, float, float | None]:
+    """``(lo, hi, interval, major_interval)`` of a height image: its valid range (0, 1 if
+    none) and the contour intervals, the given ones or :func:`nice_intervals` on its slope;
+    ``major_interval`` alone implies minors at a fifth of it. ``pixels_per_sample``: output
+    pixels per sample of ``z`` (1 / supersampling), for the slope in output pixels."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN: no range
+        lo, hi = float(np.nanmin(z)), float(np.nanmax(z))
+    if not np.isfinite(lo):
+        lo, hi = 0.0, 1.0
+    if interval is None and major_interval is None:
+        slope = typical_slope(z) / pixels_per_sample
+        interval, major_interval = nice_intervals(lo, hi, slope=slope)
+    elif interval is None:
+        interval = float(major_interval) / 5.0
+    return lo, hi, interval, major_interval
+
+
 def _fill_ring(z: np.ndarray) -> np.ndarray:
     """``z`` with each nodata cell next to data replaced by a linear extrapolation of the data.
 
@@ -219,16 +243,7 @@ def map_layers(
     (sky view) when asked for, and ``tables`` (the band colours' kernel arguments, or None).
     Every option is checked before the work starts."""
     z = heights
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN: no range
-        lo, hi = float(np.nanmin(z)), float(np.nanmax(z))
-    if not np.isfinite(lo):
-        lo, hi = 0.0, 1.0
-    auto_minor, auto_major = nice_intervals(lo, hi, slope=typical_slope(z))
-    if interval is None and major_interval is None:
-        interval, major_interval = auto_minor, auto_major
-    elif interval is None:
-        interval = float(major_interval) / 5.0
+    lo, hi, interval, major_interval = contour_intervals(z, interval, major_interval)
     band_interval = major_interval if major_interval is not None else 5.0 * float(interval)
     opts = _check_bands(bands, band_interval)
     layers: dict[str, object] = {"tables": None, "ink": None, "relief": relief}
