@@ -159,6 +159,42 @@ def _hillshade_kernel(
     return out
 
 
+def check_grid(heights: np.ndarray, dx: float, dy: float, z_factor: float) -> np.ndarray:
+    """The checks every terrain operator makes: a 2-D real ``heights`` array (returned as an
+    array), finite cell sizes ``dx``, ``dy`` > 0, a finite ``z_factor``."""
+    z = np.asarray(heights)
+    if z.ndim != 2:
+        raise InputError(f"heights: expected a 2-D (H, W) array, got shape {z.shape}")
+    if not np.issubdtype(z.dtype, np.number) or np.issubdtype(z.dtype, np.complexfloating):
+        raise InputError(f"heights: expected real numbers, got dtype {z.dtype}")
+    for name, value in (("dx", dx), ("dy", dy)):
+        if not (math.isfinite(float(value)) and float(value) > 0.0):
+            raise InputError(f"{name}: expected a finite cell size > 0, got {value!r}")
+    if not math.isfinite(float(z_factor)):
+        raise InputError(f"z_factor: expected a finite number, got {z_factor!r}")
+    return z
+
+
+def float32_heights(
+    z: np.ndarray, mask: np.ndarray | None, *, writable: bool = False
+) -> np.ndarray:
+    """``z`` as contiguous float32 with NaN at infinities and where ``mask`` is False. The
+    input is never modified: float32 input without infinities or mask is returned as it is
+    (read-only use) unless ``writable``; anything else is a copy."""
+    z32 = np.ascontiguousarray(z, dtype=np.float32)
+    infinite = bool(np.isinf(z32).any())
+    if (infinite or mask is not None or writable) and (z32 is z or np.shares_memory(z32, z)):
+        z32 = z32.copy()
+    if infinite:
+        np.putmask(z32, np.isinf(z32), np.float32(np.nan))
+    if mask is not None:
+        m = np.asarray(mask, dtype=bool)
+        if m.shape != z.shape:
+            raise InputError(f"mask: expected shape {z.shape}, got {m.shape}")
+        z32[~m] = np.nan
+    return z32
+
+
 def hillshade(
     heights: np.ndarray,
     *,
@@ -229,36 +265,16 @@ def hillshade(
     .. [5] Saito, T. & Takahashi, T. (1990). Comprehensible rendering of 3-D shapes. SIGGRAPH '90,
        197-206, §4.3.
     """
-    z = np.asarray(heights)
-    if z.ndim != 2:
-        raise InputError(f"heights: expected a 2-D (H, W) array, got shape {z.shape}")
-    if not np.issubdtype(z.dtype, np.number) or np.issubdtype(z.dtype, np.complexfloating):
-        raise InputError(f"heights: expected real numbers, got dtype {z.dtype}")
-    for name, value in (("dx", dx), ("dy", dy)):
-        if not (math.isfinite(float(value)) and float(value) > 0.0):
-            raise InputError(f"{name}: expected a finite cell size > 0, got {value!r}")
+    z = check_grid(heights, dx, dy, z_factor)
     if not 0.0 <= float(altitude) <= 90.0:
         raise InputError(f"altitude: expected degrees in [0, 90], got {altitude!r}")
-    for name, value in (("azimuth", azimuth), ("z_factor", z_factor)):
-        if not math.isfinite(float(value)):
-            raise InputError(f"{name}: expected a finite number, got {value!r}")
+    if not math.isfinite(float(azimuth)):
+        raise InputError(f"azimuth: expected a finite number, got {azimuth!r}")
     if algorithm not in _ALGORITHMS:
         raise InputError(f"algorithm: expected one of {sorted(_ALGORITHMS)}, got {algorithm!r}")
     if variant not in _VARIANTS:
         raise InputError(f"variant: expected one of {sorted(_VARIANTS)}, got {variant!r}")
-    # The kernel only reads: float32 input without infinities is used as it is; anything
-    # else is copied first, so the input is never modified.
-    z32 = np.ascontiguousarray(z, dtype=np.float32)
-    infinite = np.isinf(z32).any()
-    if infinite or mask is not None:
-        z32 = z32.copy() if z32 is z or np.shares_memory(z32, z) else z32
-        if infinite:
-            np.putmask(z32, np.isinf(z32), np.float32(np.nan))
-    if mask is not None:
-        m = np.asarray(mask, dtype=bool)
-        if m.shape != z.shape:
-            raise InputError(f"mask: expected shape {z.shape}, got {m.shape}")
-        z32[~m] = np.nan
+    z32 = float32_heights(z, mask)  # the kernel only reads it
     # GDAL: inv_ewres = 1 / geotransform[1], inv_nsres = 1 / geotransform[5] (negative: north-up).
     return _hillshade_kernel(
         z32,

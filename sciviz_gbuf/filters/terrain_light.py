@@ -17,6 +17,7 @@ from numba import njit, prange
 from scipy import ndimage
 
 from ..errors import InputError
+from .hillshade import check_grid, float32_heights
 
 __all__ = ["cast_shadows", "sky_view"]
 
@@ -263,23 +264,8 @@ def _prepare(
     heights: np.ndarray, dx: float, dy: float, z_factor: float, mask: np.ndarray | None
 ) -> np.ndarray:
     """Checked float32 copy of ``heights * z_factor`` with NaN at nodata (inputs untouched)."""
-    z = np.asarray(heights)
-    if z.ndim != 2:
-        raise InputError(f"heights: expected a 2-D (H, W) array, got shape {z.shape}")
-    if not np.issubdtype(z.dtype, np.number) or np.issubdtype(z.dtype, np.complexfloating):
-        raise InputError(f"heights: expected real numbers, got dtype {z.dtype}")
-    for name, value in (("dx", dx), ("dy", dy)):
-        if not (math.isfinite(float(value)) and float(value) > 0.0):
-            raise InputError(f"{name}: expected a finite cell size > 0, got {value!r}")
-    if not math.isfinite(float(z_factor)):
-        raise InputError(f"z_factor: expected a finite number, got {z_factor!r}")
-    z32 = z.astype(np.float32)  # always a copy: the input is never modified
-    z32[~np.isfinite(z32)] = np.nan
-    if mask is not None:
-        m = np.asarray(mask, dtype=bool)
-        if m.shape != z.shape:
-            raise InputError(f"mask: expected shape {z.shape}, got {m.shape}")
-        z32[~m] = np.nan
+    z = check_grid(heights, dx, dy, z_factor)
+    z32 = float32_heights(z, mask, writable=True)
     if float(z_factor) != 1.0:
         z32 *= np.float32(z_factor)
     return z32
