@@ -23,6 +23,7 @@ def framed_camera(
     view_angle: float = 30.0,
     aspect: float = 4 / 3,
     margin: float = 0.05,
+    points: np.ndarray | None = None,
 ) -> Camera:
     """A perspective camera looking at the centre of ``bounds``, as close as it can be.
 
@@ -42,11 +43,15 @@ def framed_camera(
     margin : float, default: 0.05
         Empty border, as a fraction of the image's half width and half height.
 
+    points : (N, 3) array, optional
+        Frame these points instead of the corners of ``bounds`` (which is then ignored): a
+        tighter fit for objects that fill their bounding box poorly.
+
     Returns
     -------
     position, focal_point, view_up : tuple of float
         As accepted by :func:`sciviz_gbuf.capture`'s ``camera``: all eight corners of
-        ``bounds`` are in view.
+        ``bounds`` (or all ``points``) are in view.
     """
     to_eye = np.asarray(direction, dtype=np.float64).reshape(3)
     world_up = np.asarray(view_up, dtype=np.float64).reshape(3)
@@ -62,10 +67,22 @@ def framed_camera(
         raise InputError(f"margin: expected a fraction in [0, 1), got {margin!r}")
     right /= np.linalg.norm(right)
     up = np.cross(right, -to_eye)
-    lo = np.asarray(bounds[0::2], dtype=np.float64)
-    hi = np.asarray(bounds[1::2], dtype=np.float64)
-    centre = (lo + hi) / 2
-    corners = np.array(np.meshgrid(*np.stack([lo, hi], axis=1))).reshape(3, -1).T - centre
+    if points is None:
+        lo = np.asarray(bounds[0::2], dtype=np.float64)
+        hi = np.asarray(bounds[1::2], dtype=np.float64)
+        centre = (lo + hi) / 2
+        corners = np.array(np.meshgrid(*np.stack([lo, hi], axis=1))).reshape(3, -1).T - centre
+    else:
+        pts = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+        pts = pts[np.isfinite(pts).all(axis=1)]
+        if len(pts) == 0:
+            raise InputError("points: expected at least one finite point to frame")
+        # Centred on the view-plane extent of the points themselves, not of their box, so a
+        # thin oblique object fills the picture.
+        centre = (pts.min(axis=0) + pts.max(axis=0)) / 2
+        r, u = (pts - centre) @ right, (pts - centre) @ up
+        centre = centre + right * (r.min() + r.max()) / 2 + up * (u.min() + u.max()) / 2
+        corners = pts - centre
     tan_v = np.tan(np.radians(view_angle) / 2) * (1.0 - margin)
     tan_h = tan_v * aspect
     # A corner at lateral offset r and height t towards the eye is in view once the eye is

@@ -1,0 +1,472 @@
+"""Enhanced CT surfaces (Saito & Takahashi 1990 §4.4, Fig. 14).
+
+A CT series is read (:func:`~sciviz_gbuf.readers.read_dicom_series`), cut at a bone or skin
+threshold (:func:`~sciviz_gbuf.isosurface.isosurface`) and rendered once into G-buffers from a
+patient-anatomical view. The enhanced image (b) of Fig. 14 combines four image operations on
+them: profiles (from ``sz``), shading (from the normals), contour lines of one world coordinate
+(heights along the body axis: ``wz``) and colour bands of another (front to back: ``wy``); the
+conventional shaded image (a) is shown beside it. Pass the G-buffer back in to try other
+parameters without reading or rendering again.
+
+Views are named in the DICOM patient frame (LPS: x to the patient's left, y to the back, z to
+the head): ``anterior`` looks at the face, ``superior`` down onto the head, and names join with
+``-`` for oblique views (``anterior-left``).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+
+import numpy as np
+import pyvista as pv
+from matplotlib.colors import LinearSegmentedColormap
+
+from ..capture import capture
+from ..errors import InputError
+from ..filters import color_bands, contour_lines, lambert, profile_edges
+from ..gbuffer import GBuffer
+from ..isosurface import isosurface
+from .birdseye import _rgba
+from .framing import framed_camera
+from .terrain import _colour, _round_up
+
+__all__ = [
+    "BONE",
+    "VIEWS",
+    "ct_enhance",
+    "ct_gbuffer",
+    "ct_layers",
+    "ct_panels",
+    "ct_surface",
+    "view_camera",
+]
+
+#: Colours of the bands, near to far: light enough for lines and shading to read on them.
+DEPTH_BANDS = LinearSegmentedColormap.from_list(
+    "sciviz_depth_bands",
+    [
+        (0.97, 0.62, 0.50),
+        (0.99, 0.84, 0.58),
+        (0.96, 0.95, 0.78),
+        (0.66, 0.85, 0.86),
+        (0.55, 0.66, 0.88),
+    ],
+)
+#: Dark sepia of the contour lines.
+CT_CONTOUR_COLOR = (0.22, 0.11, 0.04)
+#: Colour of bone in the conventional shaded image.
+BONE = (0.93, 0.87, 0.76)
+#: Eye-space light from the upper left, towards the viewer.
+LIGHT = (-0.4, 0.5, 0.77)
+#: Anatomical views: direction from the patient towards the eye, and the view-up, in LPS.
+VIEWS: dict[str, tuple[tuple[float, float, float], tuple[float, float, float]]] = {
+    "anterior": ((0.0, -1.0, 0.0), (0.0, 0.0, 1.0)),
+    "posterior": ((0.0, 1.0, 0.0), (0.0, 0.0, 1.0)),
+    "left": ((1.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
+    "right": ((-1.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
+    "superior": ((0.0, 0.0, 1.0), (0.0, -1.0, 0.0)),
+    "inferior": ((0.0, 0.0, -1.0), (0.0, -1.0, 0.0)),
+}
+_AXES = {"x": 0, "y": 1, "z": 2}
+LAYOUTS = ("pair", "enhanced", "shaded")
+
+
+def view_camera(
+    points: np.ndarray,
+    view: str | Sequence[float] = "anterior",
+    *,
+    view_angle: float = 20.0,
+    aspect: float = 1.0,
+    margin: float = 0.04,
+):
+    """A camera framing ``points`` from an anatomical view.
+
+    Parameters
+    ----------
+    points : (N, 3) array
+        What must be in view (a surface's points), in patient coordinates (LPS, mm).
+    view : str or 3 floats, default: "anterior"
+        One of :data:`VIEWS`, several joined by ``-`` (``"anterior-left"``: halfway), or a
+        direction from the object towards the eye (then the head, +z, is up unless the view is
+        along z, when the face, -y, is).
+    view_angle, aspect, margin
+        As in :func:`~sciviz_gbuf.recipes.framing.framed_camera`.
+    """
+    if isinstance(view, str):
+        names = [v.strip().lower() for v in view.split("-")]
+        bad = [n for n in names if n not in VIEWS]
+        if bad or not names:
+            raise InputError(
+                f"view: expected one of {sorted(VIEWS)} (or several joined by '-', or a "
+                f"3-vector), got {view!r}"
+            )
+        direction = np.sum([VIEWS[n][0] for n in names], axis=0)
+        if not np.linalg.norm(direction) > 0:
+            raise InputError(f"view: {view!r} names opposite directions")
+        up = np.sum([VIEWS[n][1] for n in names], axis=0)
+    else:
+        try:
+            direction = np.asarray(view, dtype=np.float64).reshape(3)
+        except (TypeError, ValueError):
+            raise InputError(f"view: expected a view name or a 3-vector, got {view!r}") from None
+        if not (np.isfinite(direction).all() and np.linalg.norm(direction) > 0):
+            raise InputError(f"view: expected a finite non-zero 3-vector, got {view!r}")
+        up = np.array([0.0, 0.0, 1.0])
+    d = direction / np.linalg.norm(direction)
+    up = up - (up @ d) * d
+    if np.linalg.norm(up) < 1e-6:
+        up = np.array([0.0, -1.0, 0.0]) - (-d[1]) * d
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    return framed_camera((), d, up, view_angle=view_angle, aspect=aspect, margin=margin, points=pts)
+
+
+def ct_surface(
+    source: str | os.PathLike | Sequence[str | os.PathLike] | pv.DataSet,
+    *,
+    iso: str | float = "bone",
+    scalars: str | None = None,
+    smooth: int = 15,
+    decimate: float = 0.0,
+    largest: bool = False,
+    series_uid: str | None = None,
+    resample: bool = False,
+    progress_bar: bool = False,
+) -> pv.PolyData:
+    """The isosurface of a DICOM folder / file list or of a volume; a surface passes through.
+
+    ``series_uid`` and ``resample`` go to :func:`~sciviz_gbuf.readers.read_dicom_series`; the
+    other options to :func:`~sciviz_gbuf.isosurface.isosurface`.
+    """
+    if isinstance(source, pv.PolyData) and source.n_cells > 0 and source.n_lines == 0:
+        return source
+    if isinstance(source, pv.DataSet):
+        volume = source
+    elif isinstance(source, (str, os.PathLike, list, tuple)):
+        from ..readers.dicom import read_dicom_series
+
+        volume = read_dicom_series(
+            source, series_uid=series_uid, resample=resample, progress_bar=progress_bar
+        )
+    else:
+        raise InputError(
+            "source: expected a DICOM folder or file list, a PyVista volume or a surface, "
+            f"got {type(source).__name__}"
+        )
+    return isosurface(
+        volume,
+        iso=iso,
+        scalars=scalars,
+        smooth=smooth,
+        decimate=decimate,
+        largest=largest,
+        progress_bar=progress_bar,
+    )
+
+
+def ct_gbuffer(
+    source,
+    *,
+    iso: str | float = "bone",
+    view: str | Sequence[float] = "anterior",
+    camera=None,
+    window_size: Sequence[int] = (1024, 1024),
+    supersample: int = 2,
+    view_angle: float = 20.0,
+    progress_bar: bool = False,
+    **surface_options,
+) -> GBuffer:
+    """Render the CT surface once from ``view`` and keep its G-buffers (1990 §4.4: wx, wy, wz,
+    sz and the normals are what Fig. 14 needs).
+
+    Parameters
+    ----------
+    source : DICOM folder, file list, volume or surface
+        See :func:`ct_surface` (``**surface_options`` go there).
+    iso : float or {"bone", "skin"}, default: "bone"
+    view : str or 3 floats, default: "anterior"
+        See :func:`view_camera`.
+    camera : optional
+        Anything :func:`~sciviz_gbuf.capture` accepts, instead of ``view``.
+    window_size : (int, int), default: (1024, 1024)
+    supersample : int, default: 2
+        Render at this many times the size: antialiased lines and silhouettes.
+    view_angle : float, default: 20
+    progress_bar : bool, default: False
+    """
+    surface = ct_surface(source, iso=iso, progress_bar=progress_bar, **surface_options)
+    w, h = (int(v) for v in window_size)
+    if camera is None:
+        position, focal, up = view_camera(
+            surface.points, view, view_angle=view_angle, aspect=w / max(h, 1)
+        )
+        camera = pv.Camera()
+        camera.position, camera.focal_point, camera.up = position, focal, up
+        camera.view_angle = view_angle
+    return capture(
+        surface,
+        window_size=(w, h),
+        camera=camera,
+        supersample=supersample,
+        progress_bar=progress_bar,
+    )
+
+
+def _axis(axis: str | None, default: int, name: str) -> int:
+    if axis is None:
+        return default
+    if axis not in _AXES:
+        raise InputError(f"{name}: expected 'x', 'y' or 'z', got {axis!r}")
+    return _AXES[axis]
+
+
+def _interval(values: np.ndarray, count: float, name: str) -> float:
+    lo, hi = float(np.nanmin(values)), float(np.nanmax(values))
+    return _round_up(max(hi - lo, 1e-6) / count) if hi > lo else 1.0
+
+
+def ct_layers(
+    gb: GBuffer,
+    *,
+    contour_axis: str | None = None,
+    contour_interval: float | None = None,
+    contour_width: float = 1.0,
+    band_axis: str | None = None,
+    bands: int | float | Sequence[float] | None = 6,
+    profile_width: float = 1.5,
+    light: Sequence[float] = LIGHT,
+) -> dict[str, np.ndarray]:
+    """The image layers of Fig. 14 from a G-buffer, at its output size.
+
+    Parameters
+    ----------
+    gb : GBuffer
+        From :func:`ct_gbuffer` (or any capture).
+    contour_axis : {"x", "y", "z"}, optional
+        World coordinate whose contour lines are drawn; default ``"z"``, the body axis (and the
+        slice axis of an axial CT): each line is where one axial level meets the surface.
+    contour_interval : float, optional
+        In world units (mm); default a round value giving about 24 lines over the surface.
+    contour_width : float, default: 1
+        Line width in output pixels; lines fade out where they crowd closer than three widths
+        (surfaces seen edge-on), which the profiles and shading show instead.
+    band_axis : {"x", "y", "z"}, optional
+        World coordinate coloured in bands, near warm to far cool; default the horizontal axis
+        (x or y) closest to the line of sight (``wy`` for the anterior view), or for views along
+        z the one most upright in the picture.
+    bands : int, float, sequence of float or None, default: 6
+        About this many bands (int), bands of this width (float), explicit band edges, or None
+        for no bands (bone colour).
+    profile_width : float, default: 1.5
+        Width of the profile lines in output pixels.
+    light : 3 floats
+        Eye-space direction towards the light.
+
+    Returns
+    -------
+    dict
+        ``sh`` shade (1 = lit), ``cn`` contour ink, ``pr`` profile ink, ``bands`` RGB
+        (H, W, 3), ``shaded`` the conventional image (a) as RGB, ``alpha`` coverage; float32.
+    """
+    if not (np.isfinite(contour_width) and contour_width > 0):
+        raise InputError(f"contour_width: expected a number > 0, got {contour_width!r}")
+    k = gb.supersample
+    mask = gb.mask
+    cam = gb.camera
+    ci = _axis(contour_axis, 2, "contour_axis")
+    # Bands default to the horizontal axis most along the line of sight (front to back in an
+    # anterior view); looking along z, to the one most upright in the picture.
+    sight = np.abs(np.asarray(cam.direction, dtype=np.float64))
+    across = sight if max(sight[0], sight[1]) > sight[2] else np.abs(cam.view_up)
+    bi = _axis(band_axis, int(np.argmax(across[:2])), "band_axis")
+    field = np.where(mask, gb.world[..., ci], np.float32(np.nan))
+    valid = mask & np.isfinite(field)
+    if not valid.any():
+        raise InputError("gb: the G-buffer covers no pixel")
+    interval = _interval(field[valid], 24, "contour_interval")
+    if contour_interval is not None:
+        if not (np.isfinite(contour_interval) and contour_interval > 0):
+            raise InputError(
+                f"contour_interval: expected a number > 0 (mm), got {contour_interval!r}"
+            )
+        interval = float(contour_interval)
+    cn = contour_lines(
+        field,
+        interval=interval,
+        width=contour_width * k,
+        mask=valid,
+        c_dense=0.0,
+        dense_spacing=3.0 * contour_width * k,
+    )
+    n = gb.normal
+    sh = lambert(n, light=light, mask=valid)
+    # Near to far ramps warm to cool, whichever way the axis points.
+    sign = np.float32(1.0 if np.asarray(cam.direction)[bi] >= 0 else -1.0)
+    depthwise = np.where(valid, sign * gb.world[..., bi], np.float32(np.nan))
+    if bands is None:
+        rgb = np.broadcast_to(np.asarray(BONE, np.float32), (*field.shape, 3))
+    else:
+        rgb = color_bands(
+            depthwise, cmap=DEPTH_BANDS, mask=valid, **_band_options(bands, depthwise)
+        )
+        rgb = rgb[..., :3]
+    # The conventional image (a): bone colour, diffuse + Blinn-Phong highlight.
+    lv = np.asarray(light, np.float64) / np.linalg.norm(light)
+    half = lv + np.array([0.0, 0.0, 1.0])
+    half /= max(np.linalg.norm(half), 1e-12)
+    spec = np.maximum(n @ half.astype(np.float32), 0.0) ** np.float32(40.0)
+    shaded = np.asarray(BONE, np.float32) * (0.15 + 0.85 * sh)[..., None]
+    shaded = np.clip(shaded + (0.35 * spec)[..., None], 0.0, 1.0)
+    nan_rgb = np.float32(np.nan)
+    return {
+        "sh": np.nan_to_num(gb.downsample(sh), nan=1.0),
+        "cn": np.nan_to_num(gb.downsample(np.where(valid, cn, np.nan))),
+        "pr": profile_edges(gb, width=profile_width),
+        "bands": np.nan_to_num(gb.downsample(np.where(valid[..., None], rgb, nan_rgb)), nan=1.0),
+        "shaded": np.nan_to_num(
+            gb.downsample(np.where(valid[..., None], shaded, nan_rgb)), nan=1.0
+        ),
+        "alpha": gb.downsample(valid.astype(np.float32)),
+    }
+
+
+def _band_options(bands, values: np.ndarray) -> dict:
+    if isinstance(bands, (bool, np.bool_)):
+        raise InputError(f"bands: expected a count, a width, band edges or None, got {bands!r}")
+    if isinstance(bands, (int, np.integer)):
+        if bands < 1:
+            raise InputError(f"bands: expected a count >= 1, got {bands!r}")
+        return {"interval": _interval(values[np.isfinite(values)], bands, "bands")}
+    if isinstance(bands, (float, np.floating)):
+        if not (np.isfinite(bands) and bands > 0):
+            raise InputError(f"bands: expected a band width > 0, got {bands!r}")
+        return {"interval": float(bands)}
+    edges = np.asarray(bands, dtype=np.float64).reshape(-1)
+    if edges.size < 1 or not np.isfinite(edges).all():
+        raise InputError(f"bands: expected finite band edges, got {bands!r}")
+    return {"levels": edges}
+
+
+def ct_panels(
+    source,
+    *,
+    contour_color: Sequence[float] = CT_CONTOUR_COLOR,
+    background: Sequence[float] | None = None,
+    layer_options: dict | None = None,
+    **gbuffer_options,
+) -> dict[str, np.ndarray]:
+    """Fig. 14's pictures as RGBA uint8: ``shaded`` (a), ``enhanced`` (b) and its parts ``pr``,
+    ``cn``, ``sh`` and ``bands`` (each multiplied by the shade).
+
+    ``source`` is a G-buffer (nothing is read or rendered) or anything :func:`ct_gbuffer`
+    takes, with ``**gbuffer_options``; ``layer_options`` go to :func:`ct_layers`.
+    """
+    gb = source if isinstance(source, GBuffer) else ct_gbuffer(source, **gbuffer_options)
+    lay = ct_layers(gb, **(layer_options or {}))
+    colour = _colour(contour_color, "contour_color")
+    sh = lay["sh"][..., None]
+    cn, pr = lay["cn"][..., None], lay["pr"][..., None]
+    lit_bands = lay["bands"] * (0.3 + 0.7 * sh)
+    white = np.ones_like(lay["bands"])
+    grey = np.clip(0.15 + 0.85 * sh, 0.0, 1.0) * white
+    images = {
+        "shaded": lay["shaded"],
+        "enhanced": (lit_bands * (1.0 - cn) + colour * cn) * (1.0 - pr),
+        "pr": white * (1.0 - pr),
+        "cn": white * (1.0 - cn) + colour * cn,
+        "sh": grey,
+        "bands": lit_bands,
+    }
+    return {key: _rgba(img, lay["alpha"], background) for key, img in images.items()}
+
+
+def ct_enhance(
+    source,
+    *,
+    iso: str | float = "bone",
+    view: str | Sequence[float] = "anterior",
+    layout: str = "pair",
+    window_size: Sequence[int] = (1024, 1024),
+    supersample: int = 2,
+    contour_axis: str | None = None,
+    contour_interval: float | None = None,
+    contour_width: float = 1.0,
+    band_axis: str | None = None,
+    bands: int | float | Sequence[float] | None = 6,
+    profile_width: float = 1.5,
+    contour_color: Sequence[float] = CT_CONTOUR_COLOR,
+    background: Sequence[float] | None = None,
+    series_uid: str | None = None,
+    resample: bool = False,
+    smooth: int = 15,
+    progress_bar: bool = False,
+) -> np.ndarray:
+    """The enhanced CT image of Saito & Takahashi 1990 Fig. 14 (b), beside the conventional (a).
+
+    Parameters
+    ----------
+    source : str, path, list of paths, pyvista.DataSet or GBuffer
+        A DICOM series folder or file list (:func:`~sciviz_gbuf.readers.read_dicom_series`),
+        a volume with point scalars (``"HU"``), a surface, or a G-buffer from
+        :func:`ct_gbuffer` (then nothing is read or rendered and the view options are ignored).
+    iso : float or {"bone", "skin"}, default: "bone"
+        Threshold of the surface (HU for the presets).
+    view : str or 3 floats, default: "anterior"
+        Anatomical view in the patient frame (see :func:`view_camera`).
+    layout : {"pair", "enhanced", "shaded"}, default: "pair"
+        (a) and (b) side by side, or one of them.
+    window_size : (int, int), default: (1024, 1024)
+        Size of each picture.
+    supersample : int, default: 2
+    contour_axis, contour_interval, contour_width, band_axis, bands, profile_width
+        See :func:`ct_layers`.
+    contour_color : RGB, default: :data:`CT_CONTOUR_COLOR` (dark sepia)
+    background : RGB, optional
+        Opaque background; default transparent.
+    series_uid, resample, smooth
+        Reading and surface options (:func:`ct_surface`).
+    progress_bar : bool, default: False
+
+    Returns
+    -------
+    (H, W, 4) uint8 RGBA; for ``"pair"`` W is twice the window width plus a gap of 1/32 of it.
+    """
+    if layout not in LAYOUTS:
+        raise InputError(f"layout: expected one of {LAYOUTS}, got {layout!r}")
+    layer_options = {
+        "contour_axis": contour_axis,
+        "contour_interval": contour_interval,
+        "contour_width": contour_width,
+        "band_axis": band_axis,
+        "bands": bands,
+        "profile_width": profile_width,
+    }
+    gbuffer_options = (
+        {}
+        if isinstance(source, GBuffer)
+        else {
+            "iso": iso,
+            "view": view,
+            "window_size": window_size,
+            "supersample": supersample,
+            "series_uid": series_uid,
+            "resample": resample,
+            "smooth": smooth,
+            "progress_bar": progress_bar,
+        }
+    )
+    panels = ct_panels(
+        source,
+        contour_color=contour_color,
+        background=background,
+        layer_options=layer_options,
+        **gbuffer_options,
+    )
+    if layout != "pair":
+        return panels[layout]
+    a, b = panels["shaded"], panels["enhanced"]
+    gap = np.zeros((a.shape[0], max(1, a.shape[1] // 32), 4), dtype=np.uint8)
+    if background is not None:
+        gap[..., :3] = np.rint(_colour(background, "background") * 255.0)
+        gap[..., 3] = 255
+    return np.concatenate([a, gap, b], axis=1)
