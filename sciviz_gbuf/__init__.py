@@ -12,6 +12,7 @@ from .capture import capture
 from .errors import InputError, RenderError, SciVizGBufError
 from .gbuffer import GBuffer
 from .recipes.birdseye import birdseye_map, sumi_e
+from .recipes.medical import ct_enhance
 from .recipes.terrain import topographic_map
 
 __version__ = "0.1.0"
@@ -25,6 +26,7 @@ __all__ = [
     "__version__",
     "birdseye_map",
     "capture",
+    "ct_enhance",
     "sumi_e",
     "topographic_map",
 ]

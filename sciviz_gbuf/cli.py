@@ -522,6 +522,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     _add_topo(sub)
     _add_birdseye(sub)
+    from .cli_medical import add_ct
+
+    add_ct(sub)
 
     p = sub.add_parser("info", help="describe a saved G-buffer file")
     p.add_argument("file", help=".npz or .vti written by capture")

@@ -5,6 +5,7 @@
 - :mod:`.saito1990`: the panels of Saito & Takahashi's Fig. 3 and Fig. 7 (and the 2003 edge map).
 - :mod:`.terrain`: plan-view topographic maps of DEMs (bands, relief, contours; Fig. 11).
 - :mod:`.birdseye`: bird's-eye maps and the sumi-e of DEMs (Figs. 12, 13).
+- :mod:`.medical`: enhanced CT surfaces (Fig. 14): profiles, shading, contours, colour bands.
 - :mod:`.contour_figures`: the panels of their Fig. 5 (contour lines), Fig. 6 (curved hatching)
   and Fig. 11 (a plan-view topographic map of the bundled DEM).
 """
@@ -19,6 +20,7 @@ from .contour_figures import (
 )
 from .framing import framed_camera, oblique_camera, terrain_birdseye_camera
 from .illustration import STYLES, fig7_edge_map, illustrate, shade_image, signed_to_grey
+from .medical import ct_enhance, ct_gbuffer, ct_layers, ct_panels, ct_surface, view_camera
 from .saito1990 import CAPTIONS, fig3_panels, fig7_panels, nut_camera
 from .terrain import nice_intervals, topographic_map
 
@@ -30,6 +32,11 @@ __all__ = [
     "birdseye_layers",
     "birdseye_map",
     "birdseye_panels",
+    "ct_enhance",
+    "ct_gbuffer",
+    "ct_layers",
+    "ct_panels",
+    "ct_surface",
     "fig3_panels",
     "fig5_panels",
     "fig6_panels",
@@ -46,5 +53,6 @@ __all__ = [
     "sumi_e",
     "terrain_birdseye_camera",
     "topographic_map",
+    "view_camera",
     "write_panels",
 ]
