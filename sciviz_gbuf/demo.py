@@ -5,7 +5,8 @@ south-east. Every channel of each G-buffer is written as a PNG, with a titled mo
 them. Then the edge figures of Saito & Takahashi (1990) on the nut: Fig. 3 (edge drawing from
 the depth image) and Fig. 7 (edge enhancement, with the 2003 edge map); and their contour
 figures, which need no capture: Fig. 5 (contour lines of s = xy, with the Fig. 4 line profiles),
-Fig. 6 (curved hatching) and Fig. 11 (a plan-view topographic map of the DEM). ``index.html``
+Fig. 6 (curved hatching) and Fig. 11 (a plan-view topographic map of the DEM); the terrain
+figures (Figs. 11-13) and the medical figure (Fig. 14, on PyVista's segmented frog). ``index.html``
 shows every image with a caption, the camera (of the captures) and the timings.
 """
 
@@ -22,7 +23,7 @@ import numpy as np
 
 from .capture import _check_window_size, capture
 from .compose import colorize, ids_to_rgb, montage, normals_to_rgb, write_png
-from .datasets import load_jacksboro_dem, load_jacksboro_terrain, load_nut
+from .datasets import load_frog_skeleton, load_jacksboro_dem, load_jacksboro_terrain, load_nut
 from .filters import lambert
 from .gbuffer import GBuffer
 from .recipes import CAPTIONS as EDGE_CAPTIONS
@@ -30,6 +31,8 @@ from .recipes import (
     CONTOUR_CAPTIONS,
     birdseye_gbuffer,
     birdseye_panels,
+    ct_gbuffer,
+    ct_panels,
     fig3_panels,
     fig5_panels,
     fig6_panels,
@@ -305,6 +308,50 @@ def _terrain_figures(window_size: tuple[int, int]) -> list[_Figure]:
     ]
 
 
+MEDICAL_CAPTIONS = {
+    "shaded": "(a) conventional shaded image: the skeleton's isosurface in bone colour, diffuse "
+    "and specular light",
+    "enhanced": "(b) enhanced image (sciviz_gbuf.ct_enhance): profiles, shading, contour lines of "
+    "wx (every 6 voxels, head to tail) and colour bands of the depth axis wz (near warm, far cool)",
+    "pr": "(pr) profiles from sz",
+    "cn": "(cn) contour lines of the world coordinate wx: where each cross-section level meets "
+    "the bone",
+    "sh": "(sh) Lambert shade from the captured normals",
+    "bands": "colour bands of wz, shaded",
+}
+#: The frog is seen from above its back, obliquely, head to the right.
+FROG_VIEW = (0.0, -0.7, 1.0)
+
+
+def medical_panels(window_size: tuple[int, int]) -> list[Panel]:
+    """The 1990 Fig. 14 panels on PyVista's bundled frog: its skeleton label is surfaced (0.5
+    isosurface of the smoothed label), rendered once and enhanced."""
+    gb = ct_gbuffer(load_frog_skeleton(), iso=0.5, view=FROG_VIEW, window_size=window_size)
+    layers = {"contour_axis": "x", "contour_interval": 6.0, "band_axis": "z"}
+    panels = ct_panels(gb, background=(1.0, 1.0, 1.0), layer_options=layers)
+    titles = {"shaded": "(a) conventional shaded", "enhanced": "(b) enhanced (Fig. 14)"}
+    titles |= {"pr": "(pr) profiles", "cn": "(cn) contours of wx", "sh": "(sh) shade"}
+    titles |= {"bands": "colour bands of wz"}
+    return [(k, titles[k], panels[k]) for k in titles]
+
+
+def _medical_figures(window_size: tuple[int, int]) -> list[_Figure]:
+    return [
+        _Figure(
+            "fig14",
+            "Medical: Saito & Takahashi 1990 Fig. 14 on PyVista's segmented frog",
+            "The skeleton label of pyvista.examples.load_frog_tissues() (an MRI segmentation: "
+            "the bundled stand-in for a CT bone threshold) is smoothed and cut at 0.5 with "
+            "flying edges, rendered once, and its G-buffer enhanced: profiles, shading, "
+            "contour lines of one world coordinate and colour bands of another, beside the "
+            "conventional shaded image. sciviz-gbuf ct does the same from a DICOM CT series.",
+            partial(medical_panels, window_size),
+            MEDICAL_CAPTIONS,
+            "volume smoothing, isosurface, rendering and filters",
+        )
+    ]
+
+
 def _write_figure(
     fig: _Figure, outdir: Path, window_size: tuple[int, int], progress_bar: bool
 ) -> None:
@@ -426,7 +473,8 @@ def run_demo(
         Every file written: per scene one PNG per channel, a montage PNG and the G-buffer
         ``.npz``; then one PNG per panel of the 1990 Fig. 3 and Fig. 7 edge figures and of the
         Fig. 5, Fig. 6 and Fig. 11 contour figures and of the terrain figures (a topographic
-        map, the Fig. 12 bird's-eye maps, the Fig. 13 sumi-e), with a montage each
+        map, the Fig. 12 bird's-eye maps, the Fig. 13 sumi-e) and of the Fig. 14 medical
+        figure (the frog's skeleton), with a montage each
         (``fig<n>_<key>.png``, ``fig<n>_montage.png``); finally ``index.html``.
     """
     width, height = _check_window_size(window_size)
@@ -436,7 +484,7 @@ def run_demo(
     for scene in scenes:
         _write_scene(scene, out, (width, height), progress_bar)
     figures = _edge_figures() + _contour_figures(max(16, min(width, height, CONTOUR_SIZE)))
-    figures += _terrain_figures((width, height))
+    figures += _terrain_figures((width, height)) + _medical_figures((width, height))
     for fig in figures:
         _write_figure(fig, out, (width, height), progress_bar)
     files = [p for s in scenes for p in s.files] + [p for f in figures for _, p in f.images]

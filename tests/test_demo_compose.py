@@ -271,8 +271,9 @@ def test_run_demo_files(demo):
     # per scene 9 channels + shade + montage, + terrain elevation; then the edge figures:
     # Fig. 3 (7 panels + montage) and Fig. 7 (8 panels + montage); then the contour figures:
     # Fig. 5 (5 panels + montage), Fig. 6 (3 + montage) and Fig. 11 (7 + montage); then the
-    # terrain figure: topographic map, Fig. 12 cn, pr, sh, mx2, mx4, Fig. 13 sumi-e + montage
-    assert len(pngs) == 2 * 11 + 1 + 8 + 9 + 6 + 4 + 8 + 8
+    # terrain figure: topographic map, Fig. 12 cn, pr, sh, mx2, mx4, Fig. 13 sumi-e + montage;
+    # the medical figure: Fig. 14 (a), (b), pr, cn, sh, bands + montage
+    assert len(pngs) == 2 * 11 + 1 + 8 + 9 + 6 + 4 + 8 + 8 + 7
     for p in files:
         assert p.is_file() and p.stat().st_size > 0
     contour_figures = ("fig5_", "fig6_", "fig11_")
@@ -292,6 +293,18 @@ def test_run_demo_files(demo):
     assert referenced == {p.name for p in pngs}
     for npz in (p for p in files if p.suffix == ".npz"):
         assert f'href="{npz.name}"' in page
+
+
+def test_run_demo_medical_figure(demo):
+    outdir, _ = demo
+    page = (outdir / "index.html").read_text(encoding="utf-8")
+    assert "Fig. 14" in page
+    shaded = np.asarray(Image.open(outdir / "fig14_shaded.png"))
+    enhanced = np.asarray(Image.open(outdir / "fig14_enhanced.png"))
+    bone = shaded[..., :3].min(axis=2) < 250  # not white paper
+    # the skeleton fills a good part of the picture, the same pixels in (a) and (b)
+    assert 0.1 < bone.mean() < 0.7
+    assert np.mean(bone == (enhanced[..., :3].min(axis=2) < 250)) > 0.97
 
 
 def test_run_demo_terrain_view(demo):
@@ -325,7 +338,7 @@ def test_run_demo_edge_figures(demo):
         assert f"fig7_{key}.png" in names
     page = (outdir / "index.html").read_text(encoding="utf-8")
     assert "Fig. 3" in page and "Fig. 7" in page
-    assert page.count("Timings:") == 2 + 2 + 3 + 1  # scenes, edge, contour, terrain figures
+    assert page.count("Timings:") == 2 + 2 + 3 + 1 + 1  # scenes; edge, contour, terrain, medical
 
     def grey(name):
         with Image.open(outdir / name) as im:
