@@ -8,12 +8,12 @@ from __future__ import annotations
 
 import json
 import os
-import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from ._block_mean import block_mean
 from .camera import CameraInfo
 from .errors import InputError
 
@@ -126,13 +126,7 @@ class GBuffer:
             return img.copy()
         if np.issubdtype(img.dtype, np.integer):
             return img[k // 2 :: k, k // 2 :: k].copy()
-        h, w = self.output_shape
-        blocks = img[: h * k, : w * k].reshape(h, k, w, k, *img.shape[2:]).astype(np.float32)
-        if not np.isnan(blocks).any():
-            return blocks.mean(axis=(1, 3))
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN blocks stay NaN
-            return np.nanmean(blocks, axis=(1, 3))
+        return block_mean(img, k, self.output_shape)
 
     def __repr__(self) -> str:
         h, w = self.shape

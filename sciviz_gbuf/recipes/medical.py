@@ -70,6 +70,8 @@ VIEWS: dict[str, tuple[tuple[float, float, float], tuple[float, float, float]]] 
 }
 _AXES = {"x": 0, "y": 1, "z": 2}
 LAYOUTS = ("pair", "enhanced", "shaded")
+#: The pictures of :func:`ct_panels`.
+PANELS = ("shaded", "enhanced", "pr", "cn", "sh", "bands")
 
 
 def view_camera(
@@ -353,14 +355,19 @@ def ct_panels(
     contour_color: Sequence[float] = CT_CONTOUR_COLOR,
     background: Sequence[float] | None = None,
     layer_options: dict | None = None,
+    keys: Sequence[str] | None = None,
     **gbuffer_options,
 ) -> dict[str, np.ndarray]:
     """Fig. 14's pictures as RGBA uint8: ``shaded`` (a), ``enhanced`` (b) and its parts ``pr``,
     ``cn``, ``sh`` and ``bands`` (each multiplied by the shade).
 
     ``source`` is a G-buffer (nothing is read or rendered) or anything :func:`ct_gbuffer`
-    takes, with ``**gbuffer_options``; ``layer_options`` go to :func:`ct_layers`.
+    takes, with ``**gbuffer_options``; ``layer_options`` go to :func:`ct_layers`; ``keys``
+    limits the pictures made (default all).
     """
+    wanted = PANELS if keys is None else tuple(keys)
+    if not set(wanted) <= set(PANELS):
+        raise InputError(f"keys: expected some of {PANELS}, got {keys!r}")
     gb = source if isinstance(source, GBuffer) else ct_gbuffer(source, **gbuffer_options)
     lay = ct_layers(gb, **(layer_options or {}))
     colour = _colour(contour_color, "contour_color")
@@ -368,16 +375,15 @@ def ct_panels(
     cn, pr = lay["cn"][..., None], lay["pr"][..., None]
     lit_bands = lay["bands"] * (0.3 + 0.7 * sh)
     white = np.ones_like(lay["bands"])
-    grey = np.clip(0.15 + 0.85 * sh, 0.0, 1.0) * white
     images = {
-        "shaded": lay["shaded"],
-        "enhanced": (lit_bands * (1.0 - cn) + colour * cn) * (1.0 - pr),
-        "pr": white * (1.0 - pr),
-        "cn": white * (1.0 - cn) + colour * cn,
-        "sh": grey,
-        "bands": lit_bands,
+        "shaded": lambda: lay["shaded"],
+        "enhanced": lambda: (lit_bands * (1.0 - cn) + colour * cn) * (1.0 - pr),
+        "pr": lambda: white * (1.0 - pr),
+        "cn": lambda: white * (1.0 - cn) + colour * cn,
+        "sh": lambda: np.clip(0.15 + 0.85 * sh, 0.0, 1.0) * white,
+        "bands": lambda: lit_bands,
     }
-    return {key: _rgba(img, lay["alpha"], background) for key, img in images.items()}
+    return {key: _rgba(images[key](), lay["alpha"], background) for key in wanted}
 
 
 def ct_enhance(
@@ -460,6 +466,7 @@ def ct_enhance(
         contour_color=contour_color,
         background=background,
         layer_options=layer_options,
+        keys=("shaded", "enhanced") if layout == "pair" else (layout,),
         **gbuffer_options,
     )
     if layout != "pair":
