@@ -152,15 +152,22 @@ def isosurface(
     method = "flying_edges" if isinstance(grid, pv.ImageData) else "contour"
     stages = 1 + (smooth > 0) + (decimate > 0) + largest + 1
     with progress(progress_bar, stages, "isosurface") as bar:
+        # The volume's own gradient gives the best normals of an isosurface; once the surface
+        # is moved (smoothing, decimation) they are recomputed from the triangles instead.
+        gradient_normals = smooth == 0 and decimate == 0
         surf = grid.contour(
-            [level], scalars="iso_scalars", method=method, compute_normals=False
-        ).triangulate()
+            [level], scalars="iso_scalars", method=method, compute_normals=gradient_normals
+        )
+        if not surf.is_all_triangles:
+            surf = surf.triangulate()
         bar.step("contour")
         if surf.n_cells == 0:
             raise InputError(f"iso: no surface at {level:g} in {name!r}")
-        surf.point_data.clear()
+        for key in [k for k in surf.point_data.keys() if k != "Normals"]:
+            del surf.point_data[key]
         if largest:
             surf = surf.connectivity("largest")
+            del surf.point_data["RegionId"], surf.cell_data["RegionId"]
             bar.step("largest piece")
         if smooth > 0:
             surf = surf.smooth_taubin(n_iter=int(smooth), pass_band=0.1, normalize_coordinates=True)
@@ -168,9 +175,11 @@ def isosurface(
         if decimate > 0:
             surf = surf.decimate(float(decimate))
             bar.step("decimation")
-        surf = surf.compute_normals(
-            cell_normals=False, split_vertices=False, consistent_normals=True
-        )
+        if not gradient_normals:
+            # Contouring keeps the triangles' orientation consistent, so no reorientation pass.
+            surf = surf.compute_normals(
+                cell_normals=False, split_vertices=False, consistent_normals=False
+            )
         bar.step("normals")
     surf = pv.PolyData(surf) if not isinstance(surf, pv.PolyData) else surf
     surf.field_data["isosurface"] = [
