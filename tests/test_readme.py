@@ -24,6 +24,9 @@ def test_readme_python_example_runs(tmp_path, monkeypatch):
     edges = spaces[1]
     assert edges["picture"].shape == (768, 1024, 3)
     assert edges["profile"].max() == 1.0 and edges["inner"].max() > 0.5
+    medical = next(ns for ns in spaces if "pair" in ns)
+    assert medical["pair"].shape == (384, 2 * 512 + 16, 4)
+    assert (tmp_path / "frog_fig14.png").is_file()
 
 
 def test_quick_start_has_two_commands_and_ci_runs_the_test_one():
