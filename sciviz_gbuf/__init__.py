@@ -13,6 +13,7 @@ from .errors import InputError, RenderError, SciVizGBufError
 from .gbuffer import GBuffer
 from .recipes.birdseye import birdseye_map, sumi_e
 from .recipes.medical import ct_enhance
+from .recipes.surface import surface_analysis
 from .recipes.terrain import topographic_map
 
 __version__ = "0.1.0"
@@ -28,5 +29,6 @@ __all__ = [
     "capture",
     "ct_enhance",
     "sumi_e",
+    "surface_analysis",
     "topographic_map",
 ]

@@ -523,8 +523,10 @@ def build_parser() -> argparse.ArgumentParser:
     _add_topo(sub)
     _add_birdseye(sub)
     from .cli_medical import add_ct
+    from .cli_surface import add_patches
 
     add_ct(sub)
+    add_patches(sub)
 
     p = sub.add_parser("info", help="describe a saved G-buffer file")
     p.add_argument("file", help=".npz or .vti written by capture")

@@ -6,7 +6,8 @@ them. Then the edge figures of Saito & Takahashi (1990) on the nut: Fig. 3 (edge
 the depth image) and Fig. 7 (edge enhancement, with the 2003 edge map); and their contour
 figures, which need no capture: Fig. 5 (contour lines of s = xy, with the Fig. 4 line profiles),
 Fig. 6 (curved hatching) and Fig. 11 (a plan-view topographic map of the DEM); the terrain
-figures (Figs. 11-13) and the medical figure (Fig. 14, on PyVista's segmented frog). ``index.html``
+figures (Figs. 11-13), the medical figure (Fig. 14, on PyVista's segmented frog) and the surface
+analysis figure (Fig. 15, two Bezier patches joined with C1 and with C2 continuity). ``index.html``
 shows every image with a caption, the camera (of the captures) and the timings.
 """
 
@@ -39,7 +40,10 @@ from .recipes import (
     fig7_panels,
     fig11_panels,
     nut_camera,
+    seam_patches,
     sumi_e,
+    surface_analysis,
+    surface_gbuffer,
     terrain_birdseye_camera,
     topographic_map,
     write_panels,
@@ -352,6 +356,64 @@ def _medical_figures(window_size: tuple[int, int]) -> list[_Figure]:
     ]
 
 
+SURFACE_CAPTIONS = {
+    "a_contours": "(a) contour lines of height on the C1 surface (two bicubic patches joined "
+    "along the middle)",
+    "b_reflection_c1": "(b) pseudo-highlight pattern (reflection lines) on the C1, not C2, join: "
+    "the lines turn sharply at the seam",
+    "b_reflection_c2": "the same on a C2 join: the lines run on smoothly",
+    "zebra_c1": "zebra stripes (the CAD tools' form of the pattern) on the C1 join",
+    "zebra_c2": "zebra stripes on the C2 join",
+    "curvature_c1": "analytic mean curvature, C1 join (diverging map symmetric about 0: blue "
+    "negative, red positive, white flat; the sign follows the patch normal Su x Sv): it jumps "
+    "at the seam",
+    "curvature_c2": "analytic mean curvature, C2 join: continuous",
+    "isophotes_c1": "isophotes (every 10 degrees of the light angle) on the C1 join",
+}
+#: Looking down on the seam surface; the seam runs up the middle of the picture.
+SEAM_VIEW = ((1.0, -1.2, 4.0), (1.0, 0.75, 0.6), (0.0, 1.0, 0.0))
+
+
+def surface_panels(window_size: tuple[int, int]) -> list[Panel]:
+    """The 1990 Fig. 15 panels on two bicubic patches built in code (C1 and C2 joins)."""
+    opts = {"axis": (1.0, 0.4, 0.0), "stripes": 24, "background": (1.0, 1.0, 1.0)}
+    gbs = {
+        c: surface_gbuffer(seam_patches(c), view=SEAM_VIEW, window_size=window_size)
+        for c in ("C1", "C2")
+    }
+    c1, c2 = gbs["C1"], gbs["C2"]
+    curv = {"curvature": "mean", "curvature_limit": 1.5, "background": (1.0, 1.0, 1.0)}
+    iso = opts | {"stripes": 36}  # a line every 10 degrees of the light angle
+    return [
+        ("a_contours", "(a) contour lines", surface_analysis(c1, mode="contours", **opts)),
+        ("b_reflection_c1", "(b) reflection lines, C1", surface_analysis(c1, **opts)),
+        ("b_reflection_c2", "reflection lines, C2", surface_analysis(c2, **opts)),
+        ("zebra_c1", "zebra, C1", surface_analysis(c1, mode="stripes", **opts)),
+        ("zebra_c2", "zebra, C2", surface_analysis(c2, mode="stripes", **opts)),
+        ("curvature_c1", "mean curvature, C1", surface_analysis(c1, mode="curvature", **curv)),
+        ("curvature_c2", "mean curvature, C2", surface_analysis(c2, mode="curvature", **curv)),
+        ("isophotes_c1", "isophotes, C1", surface_analysis(c1, mode="isophote", **iso)),
+    ]
+
+
+def _surface_figures(window_size: tuple[int, int]) -> list[_Figure]:
+    return [
+        _Figure(
+            "fig15",
+            "Surface analysis: Saito & Takahashi 1990 Fig. 15, two bicubic patches",
+            "Two bicubic Bezier patches joined along the middle with C1 (not C2) continuity, "
+            "and for comparison with C2, tessellated with analytic normals and curvatures, "
+            "rendered once each, then enhanced: contour lines of height, the pseudo-highlight "
+            "pattern (reflections of parallel lights at infinity, axis (1, 0.4, 0), 24 per "
+            "turn) as lines and as zebra stripes, the mean curvature and isophotes. The C1 "
+            "join shows as a kink in every reflection line; the C2 join does not show.",
+            partial(surface_panels, window_size),
+            SURFACE_CAPTIONS,
+            "tessellation, rendering and filters",
+        )
+    ]
+
+
 def _write_figure(
     fig: _Figure, outdir: Path, window_size: tuple[int, int], progress_bar: bool
 ) -> None:
@@ -474,7 +536,7 @@ def run_demo(
         ``.npz``; then one PNG per panel of the 1990 Fig. 3 and Fig. 7 edge figures and of the
         Fig. 5, Fig. 6 and Fig. 11 contour figures and of the terrain figures (a topographic
         map, the Fig. 12 bird's-eye maps, the Fig. 13 sumi-e) and of the Fig. 14 medical
-        figure (the frog's skeleton), with a montage each
+        figure (the frog's skeleton) and the Fig. 15 surface analysis, with a montage each
         (``fig<n>_<key>.png``, ``fig<n>_montage.png``); finally ``index.html``.
     """
     width, height = _check_window_size(window_size)
@@ -485,6 +547,7 @@ def run_demo(
         _write_scene(scene, out, (width, height), progress_bar)
     figures = _edge_figures() + _contour_figures(max(16, min(width, height, CONTOUR_SIZE)))
     figures += _terrain_figures((width, height)) + _medical_figures((width, height))
+    figures += _surface_figures((width, height))
     for fig in figures:
         _write_figure(fig, out, (width, height), progress_bar)
     files = [p for s in scenes for p in s.files] + [p for f in figures for _, p in f.images]

@@ -27,6 +27,9 @@ def test_readme_python_example_runs(tmp_path, monkeypatch):
     medical = next(ns for ns in spaces if "pair" in ns)
     assert medical["pair"].shape == (384, 2 * 512 + 16, 4)
     assert (tmp_path / "frog_fig14.png").is_file()
+    surface = next(ns for ns in spaces if "zebra" in ns)
+    assert surface["zebra"].shape == (360, 480) and surface["lines"].max() > 0.9
+    assert (tmp_path / "zebra.png").is_file()
 
 
 def test_quick_start_has_two_commands_and_ci_runs_the_test_one():

@@ -16,6 +16,7 @@ from .operators import (
     sobel_gradient,
     suppress_zeroth_order,
 )
+from .reflection import highlight_lines, isophotes, reflection_angle, reflection_lines
 from .shading import lambert
 from .terrain_light import cast_shadows, sky_view
 
@@ -34,13 +35,17 @@ __all__ = [
     "edge_map",
     "enhance",
     "hatching",
+    "highlight_lines",
     "hillshade",
     "id_edges",
     "internal_edges",
+    "isophotes",
     "lambert",
     "normalize_gradient",
     "polylines_to_geojson",
     "profile_edges",
+    "reflection_angle",
+    "reflection_lines",
     "second_order",
     "sky_view",
     "sobel_gradient",

@@ -6,6 +6,8 @@
 - :mod:`.terrain`: plan-view topographic maps of DEMs (bands, relief, contours; Fig. 11).
 - :mod:`.birdseye`: bird's-eye maps and the sumi-e of DEMs (Figs. 12, 13).
 - :mod:`.medical`: enhanced CT surfaces (Fig. 14): profiles, shading, contours, colour bands.
+- :mod:`.surface`: surface analysis of Bezier patches (Fig. 15): reflection lines, zebra,
+  isophotes, curvature maps, contours; :func:`seam_patches` builds the paper's C1 surface.
 - :mod:`.contour_figures`: the panels of their Fig. 5 (contour lines), Fig. 6 (curved hatching)
   and Fig. 11 (a plan-view topographic map of the bundled DEM).
 """
@@ -22,6 +24,7 @@ from .framing import framed_camera, oblique_camera, terrain_birdseye_camera
 from .illustration import STYLES, fig7_edge_map, illustrate, shade_image, signed_to_grey
 from .medical import ct_enhance, ct_gbuffer, ct_layers, ct_panels, ct_surface, view_camera
 from .saito1990 import CAPTIONS, fig3_panels, fig7_panels, nut_camera
+from .surface import seam_patches, surface_analysis, surface_gbuffer, surface_layers
 from .terrain import nice_intervals, topographic_map
 
 __all__ = [
@@ -48,9 +51,13 @@ __all__ = [
     "nice_intervals",
     "nut_camera",
     "oblique_camera",
+    "seam_patches",
     "shade_image",
     "signed_to_grey",
     "sumi_e",
+    "surface_analysis",
+    "surface_gbuffer",
+    "surface_layers",
     "terrain_birdseye_camera",
     "topographic_map",
     "view_camera",

@@ -1,0 +1,102 @@
+"""The ``sciviz-gbuf patches`` command: surface analysis of Bezier patches (1990 Fig. 15)."""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+__all__ = ["add_patches"]
+
+_AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
+
+
+def _axis(text: str) -> tuple[float, float, float]:
+    key = text.strip().lower()
+    if key in _AXES:
+        return _AXES[key]
+    try:
+        values = tuple(float(v) for v in key.split(","))
+    except ValueError:
+        values = ()
+    if len(values) != 3 or not any(values):
+        raise argparse.ArgumentTypeError(f"expected x, y, z or a vector X,Y,Z, got {text!r}")
+    return values  # type: ignore[return-value]
+
+
+def _cmd_patches(args: argparse.Namespace) -> int:
+    from .cli import _png_output, _show_progress
+    from .compose import write_png
+    from .readers.patches import read_patches
+    from .recipes.surface import surface_analysis, surface_gbuffer
+
+    out = _png_output(args.output)
+    t0 = time.perf_counter()
+    patches = read_patches(args.file)
+    gb = surface_gbuffer(
+        patches,
+        view=args.view,
+        resolution=args.resolution,
+        window_size=args.size,
+        supersample=args.supersample,
+        progress_bar=_show_progress(args),
+    )
+    image = surface_analysis(
+        gb,
+        mode=args.mode,
+        axis=args.axis,
+        stripes=args.stripes,
+        width=args.width,
+        curvature=args.curvature,
+        background=(1.0, 1.0, 1.0) if args.white else None,
+    )
+    write_png(out, image)
+    print(
+        f"wrote {out} ({args.mode}) of {len(patches)} patches from {Path(args.file).name} "
+        f"in {time.perf_counter() - t0:.1f} s"
+    )
+    return 0
+
+
+def add_patches(sub) -> None:
+    """Add the ``patches`` sub-command to the ``sciviz-gbuf`` parser."""
+    from .cli import _add_progress, _number, _positive_int, _size
+    from .recipes.surface import CURVATURES, MODES
+
+    p = sub.add_parser(
+        "patches",
+        help="surface analysis of Bezier patches: reflection lines, zebra, curvature (Fig. 15)",
+        description="Read a .bpt Bezier patch file, tessellate it with analytic normals and "
+        "curvatures, render it once and draw reflection lines (pseudo-highlight), zebra "
+        "stripes, highlight lines, isophotes, a curvature map or contour lines of height.",
+    )
+    p.add_argument("file", help=".bpt patch file (count; per patch 'du dv' and the points)")
+    p.add_argument("-o", "--output", required=True, help="output image (.png)")
+    p.add_argument("--mode", default="reflection", choices=MODES, help="what to draw")
+    p.add_argument("--view", default="iso", help="iso, xy, xz, yz, yx, zx or zy")
+    p.add_argument("--size", type=_size, default=(1024, 768), help="image size WxH")
+    p.add_argument(
+        "--supersample", type=_positive_int, default=2, help="render at k times the size"
+    )
+    p.add_argument(
+        "--resolution", type=_positive_int, default=32, help="tessellation per patch and side"
+    )
+    p.add_argument(
+        "--axis", type=_axis, default=(0.0, 0.0, 1.0), help="light-line direction (x|y|z|X,Y,Z)"
+    )
+    p.add_argument(
+        "--stripes",
+        type=_number(lambda v: v >= 1, "a number >= 1"),
+        default=16.0,
+        help="lines (or stripe pairs) per turn around the axis (default 16)",
+    )
+    p.add_argument(
+        "--width",
+        type=_number(lambda v: v > 0, "a width in pixels > 0"),
+        default=1.5,
+        help="line width in pixels (default 1.5)",
+    )
+    p.add_argument("--curvature", default="gaussian", choices=CURVATURES, help="curvature map")
+    p.add_argument("--white", action="store_true", help="white background (default transparent)")
+    _add_progress(p)
+    p.set_defaults(func=_cmd_patches)
