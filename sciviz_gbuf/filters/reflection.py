@@ -22,6 +22,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..gbuffer import GBuffer
+from . import _reflection_kernels as _rk
 from .contours import contour_lines
 
 __all__ = ["highlight_lines", "isophotes", "reflection_angle", "reflection_lines"]
@@ -76,39 +77,36 @@ def reflection_angle(
     a = _unit(axis, "axis")
     if mode not in MODES:
         raise InputError(f"mode: expected one of {MODES}, got {mode!r}")
-    n = gb.world_normal().astype(np.float64)
-    if mode == "reflection":
-        cam = gb.camera
-        if cam.parallel_projection:
-            d = np.broadcast_to(cam.direction, n.shape)
-        else:
-            d = gb.world.astype(np.float64) - np.asarray(cam.position, dtype=np.float64)
-            d /= np.linalg.norm(d, axis=-1, keepdims=True)
-        r = d - 2.0 * np.sum(d * n, axis=-1, keepdims=True) * n
-    else:
-        r = n
-    e1, e2 = _axis_frame(a)
-    theta = np.arctan2(r @ e2, r @ e1).astype(np.float32)
-    return np.where(gb.mask, theta, np.float32(np.nan))
+    return _theta(gb, a, mode, 0.0)
+
+
+def _theta(gb: GBuffer, axis: np.ndarray, mode: str, phase_rad: float) -> np.ndarray:
+    cam = gb.camera
+    e1, e2 = _axis_frame(axis)
+    out = np.empty(gb.mask.shape, dtype=np.float32)
+    _rk.theta_image(
+        np.ascontiguousarray(gb.normal, dtype=np.float32),
+        np.ascontiguousarray(gb.world, dtype=np.float32),
+        gb.mask,
+        np.ascontiguousarray(cam.view_matrix_array[:3, :3], dtype=np.float32),
+        np.asarray(cam.position, dtype=np.float32),
+        np.asarray(cam.direction, dtype=np.float32),
+        bool(cam.parallel_projection),
+        mode == "reflection",
+        e1.astype(np.float32),
+        e2.astype(np.float32),
+        np.float32(np.angle(np.exp(1j * phase_rad))),
+        out,
+    )
+    return out
 
 
 def _wrapped_gradient(theta: np.ndarray) -> np.ndarray:
     """|grad theta| in radians per pixel with central differences taken modulo 2 pi, so the
     branch cut of ``arctan2`` is no edge; one-sided next to the background and image border."""
-
-    def diff(axis: int) -> np.ndarray:
-        t = np.moveaxis(theta, axis, 0)
-        fwd = np.full_like(t, np.nan)
-        fwd[:-1] = t[1:] - t[:-1]
-        fwd = (fwd + np.pi) % (2 * np.pi) - np.pi
-        bwd = np.full_like(t, np.nan)
-        bwd[1:] = fwd[:-1]
-        both = np.where(np.isnan(fwd), bwd, np.where(np.isnan(bwd), fwd, 0.5 * (fwd + bwd)))
-        return np.moveaxis(both, 0, axis)
-
-    with np.errstate(invalid="ignore"):
-        g = np.hypot(diff(0), diff(1))
-    return np.nan_to_num(g, nan=0.0).astype(np.float32)
+    out = np.empty(theta.shape, dtype=np.float32)
+    _rk.wrapped_gradient(np.ascontiguousarray(theta, dtype=np.float32), out)
+    return out
 
 
 def _stripes(theta: np.ndarray, period: float, duty: float) -> np.ndarray:
@@ -126,16 +124,7 @@ def _stripes(theta: np.ndarray, period: float, duty: float) -> np.ndarray:
     return np.where(np.isfinite(theta), ink, np.float32(0.0)).astype(np.float32)
 
 
-def _pattern(
-    gb: GBuffer,
-    theta: np.ndarray,
-    *,
-    count: float,
-    width: float,
-    style: str,
-    duty: float,
-    phase: float,
-) -> np.ndarray:
+def _check_pattern(count: float, width: float, style: str, duty: float) -> None:
     if not (np.isfinite(count) and count >= 1):
         raise InputError(f"stripes: expected a number of lines >= 1 per turn, got {count!r}")
     if not (np.isfinite(width) and width > 0):
@@ -144,10 +133,13 @@ def _pattern(
         raise InputError(f"style: expected one of {STYLES}, got {style!r}")
     if not 0.0 < duty < 1.0:
         raise InputError(f"duty: expected a fraction in (0, 1), got {duty!r}")
+
+
+def _pattern(
+    gb: GBuffer, t: np.ndarray, *, count: float, width: float, style: str, duty: float
+) -> np.ndarray:
+    """Lines or stripes of the angle image ``t`` (in [-pi, pi), NaN off the surface)."""
     period = 2.0 * np.pi / float(count)
-    shifted = np.float32(np.radians(phase))
-    t = theta - shifted
-    t = (t + np.float32(np.pi)) % np.float32(2 * np.pi) - np.float32(np.pi)
     valid = np.isfinite(t)
     if style == "stripes":
         ink = _stripes(t, period, duty)
@@ -208,8 +200,15 @@ def reflection_lines(
     -------
     (H, W) float32 ink in [0, 1] at the output size; 0 on the background.
     """
-    theta = reflection_angle(gb, axis=axis, mode=mode)
-    return _pattern(gb, theta, count=stripes, width=width, style=style, duty=duty, phase=phase)
+    gb = _check_gbuffer(gb)
+    a = _unit(axis, "axis")
+    if mode not in MODES:
+        raise InputError(f"mode: expected one of {MODES}, got {mode!r}")
+    _check_pattern(stripes, width, style, duty)
+    if not np.isfinite(phase):
+        raise InputError(f"phase: expected degrees, got {phase!r}")
+    t = _theta(gb, a, mode, float(np.radians(phase)))
+    return _pattern(gb, t, count=stripes, width=width, style=style, duty=duty)
 
 
 def highlight_lines(gb: GBuffer, **options) -> np.ndarray:
