@@ -389,3 +389,17 @@ def test_cli_patches(tmp_path, capsys):
     bad.write_text("1\n3 3\n0 0 0\n")
     assert main(["patches", str(bad), "-o", str(out)]) == 2
     assert "line" in capsys.readouterr().err
+
+
+def test_parametric_surfaces_keep_their_uv_and_get_curvature():
+    gb = surface_gbuffer(pv.ParametricTorus, view="iso", window_size=(160, 120))
+    assert gb.uv is not None
+    assert np.nanmax(gb.uv) <= 1.0 + 1e-4 and np.nanmin(gb.uv) >= -1e-4  # barycentric round-off
+    img = surface_analysis(gb, mode="curvature")
+    assert (img[..., 3] == 255).mean() > 0.3  # (the centre of the picture is the hole)
+    # the outer rim of a torus is elliptic (K > 0, red), the inner hyperbolic (K < 0, blue)
+    k = gb.scalars["gaussian_curvature"][gb.mask]
+    assert k.max() > 0 > k.min()
+    plain = surface_gbuffer(pv.Sphere(radius=2.0), window_size=(96, 96))
+    k = plain.scalars["gaussian_curvature"][plain.mask]
+    assert abs(np.median(k) - 0.25) < 0.03  # mesh-based, 1 / r^2

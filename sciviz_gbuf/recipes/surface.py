@@ -93,17 +93,30 @@ def seam_patches(continuity: str = "C1", *, bend: float = 0.5):
 
 
 def _surface(source, resolution) -> pv.PolyData:
-    from ..readers.patches import PatchSet, read_patches
+    from vtkmodules.vtkCommonComputationalGeometry import vtkParametricFunction
+
+    from ..readers.patches import PatchSet, parametric_mesh, read_patches
 
     if isinstance(source, (str, os.PathLike)):
         source = read_patches(source)
     if isinstance(source, PatchSet):
         return source.to_mesh(resolution=resolution)
+    if isinstance(source, vtkParametricFunction) or (
+        callable(source) and not isinstance(source, pv.DataSet)
+    ):
+        return parametric_mesh(source)  # pv.ParametricTorus and friends, with their (u, v)
     if isinstance(source, pv.PolyData) and source.n_cells > 0:
-        return source
+        if source.active_texture_coordinates is not None and "uv" not in source.point_data:
+            return parametric_mesh(source)
+        mesh = source.copy(deep=False)
+        if "gaussian_curvature" not in mesh.point_data:
+            # Any other surface: discrete (mesh-based) curvatures, so the curvature map works.
+            mesh.point_data["gaussian_curvature"] = mesh.curvature("gaussian")
+            mesh.point_data["mean_curvature"] = mesh.curvature("mean")
+        return mesh
     raise InputError(
-        "patches: expected a .bpt file, a PatchSet or a pyvista.PolyData surface, "
-        f"got {type(source).__name__}"
+        "patches: expected a .bpt file, a PatchSet, a parametric surface or a pyvista.PolyData "
+        f"surface, got {type(source).__name__}"
     )
 
 
@@ -121,8 +134,12 @@ def surface_gbuffer(
 
     Parameters
     ----------
-    source : path to a .bpt file, PatchSet or pyvista.PolyData
-        A surface with point ``"Normals"`` keeps them (patches: the analytic ones).
+    source : path to a .bpt file, PatchSet, parametric surface or pyvista.PolyData
+        Patches are tessellated with analytic normals and curvatures; a parametric surface
+        (``pv.ParametricTorus``, a ``vtkParametricFunction``, or a mesh made with
+        ``texture_coordinates=True``) goes through
+        :func:`~sciviz_gbuf.readers.patches.parametric_mesh` (its u/v kept); any other surface
+        keeps its point ``"Normals"`` and gets mesh-based curvatures if it has none.
     view : camera, default: "iso"
         Anything :func:`~sciviz_gbuf.capture` accepts (``"iso"``, ``"xy"``, a camera...); the
         named views are framed tightly on the surface.
