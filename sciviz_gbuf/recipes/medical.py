@@ -222,7 +222,8 @@ def _axis(axis: str | None, default: int, name: str) -> int:
     return _AXES[axis]
 
 
-def _interval(values: np.ndarray, count: float, name: str) -> float:
+def _interval(values: np.ndarray, count: float) -> float:
+    """A round step (1, 2, 2.5, 5 x 10^k) giving about ``count`` steps over the values."""
     lo, hi = float(np.nanmin(values)), float(np.nanmax(values))
     return _round_up(max(hi - lo, 1e-6) / count) if hi > lo else 1.0
 
@@ -285,7 +286,7 @@ def ct_layers(
     valid = mask & np.isfinite(field)
     if not valid.any():
         raise InputError("gb: the G-buffer covers no pixel")
-    interval = _interval(field[valid], 24, "contour_interval")
+    interval = _interval(field[valid], 24)
     if contour_interval is not None:
         if not (np.isfinite(contour_interval) and contour_interval > 0):
             raise InputError(
@@ -338,7 +339,7 @@ def _band_options(bands, values: np.ndarray) -> dict:
     if isinstance(bands, (int, np.integer)):
         if bands < 1:
             raise InputError(f"bands: expected a count >= 1, got {bands!r}")
-        return {"interval": _interval(values[np.isfinite(values)], bands, "bands")}
+        return {"interval": _interval(values[np.isfinite(values)], bands)}
     if isinstance(bands, (float, np.floating)):
         if not (np.isfinite(bands) and bands > 0):
             raise InputError(f"bands: expected a band width > 0, got {bands!r}")
