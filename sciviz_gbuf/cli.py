@@ -523,10 +523,12 @@ def build_parser() -> argparse.ArgumentParser:
     _add_topo(sub)
     _add_birdseye(sub)
     from .cli_medical import add_ct
+    from .cli_mesh import add_mesh
     from .cli_surface import add_patches
 
     add_ct(sub)
     add_patches(sub)
+    add_mesh(sub)
 
     p = sub.add_parser("info", help="describe a saved G-buffer file")
     p.add_argument("file", help=".npz or .vti written by capture")

@@ -7,7 +7,9 @@ the depth image) and Fig. 7 (edge enhancement, with the 2003 edge map); and thei
 figures, which need no capture: Fig. 5 (contour lines of s = xy, with the Fig. 4 line profiles),
 Fig. 6 (curved hatching) and Fig. 11 (a plan-view topographic map of the DEM); the terrain
 figures (Figs. 11-13), the medical figure (Fig. 14, on PyVista's segmented frog) and the surface
-analysis figure (Fig. 15, two Bezier patches joined with C1 and with C2 continuity). ``index.html``
+analysis figure (Fig. 15, two Bezier patches joined with C1 and with C2 continuity) and the NPR
+styles (2003 §5: technical illustration, cartoon, hatching, a mirror; 1990 line drawings).
+``index.html``
 shows every image with a caption, the camera (of the captures) and the timings.
 """
 
@@ -21,7 +23,9 @@ from functools import partial
 from pathlib import Path
 
 import numpy as np
+import pyvista as pv
 
+from . import styles
 from .capture import _check_window_size, capture
 from .compose import colorize, ids_to_rgb, montage, normals_to_rgb, write_png
 from .datasets import load_frog_skeleton, load_jacksboro_dem, load_jacksboro_terrain, load_nut
@@ -39,6 +43,7 @@ from .recipes import (
     fig6_panels,
     fig7_panels,
     fig11_panels,
+    named_view_camera,
     nut_camera,
     seam_patches,
     sumi_e,
@@ -48,6 +53,8 @@ from .recipes import (
     topographic_map,
     write_panels,
 )
+from .recipes.illustration import shade_image
+from .recipes.npr import MIRROR_CAMERA, mirror_scene
 
 __all__ = ["run_demo", "terrain_birdseye_camera"]
 
@@ -414,6 +421,79 @@ def _surface_figures(window_size: tuple[int, int]) -> list[_Figure]:
     ]
 
 
+NPR_CAPTIONS = {
+    "gooch": "technical illustration (Gooch et al. 1998): warm-cool shading, inner edges white, "
+    "profiles black via the 2003 edge map (Nienhaus & Döllner Fig. 7)",
+    "toon": "cartoon shading (Lake et al. 2000): 3 shade levels by nearest lookup of N.L, black "
+    "edges (2003 Fig. 9, left)",
+    "toon_smooth": "the same with the transitions between the colour patches smoothed (the 2003 "
+    "cartoon map, Fig. 9 right)",
+    "hatch": "halftone hatching (Freudenberg et al. 2002): prioritised stroke families thicken "
+    "smoothly with the shade, with profiles (2003 Fig. 8)",
+    "lines_shuv": "1990 Fig. 9 (shuv): curved hatching of the torus's u and v, enhanced with the "
+    "shade, with profiles",
+    "hatch_uv": "hatching along the surface parameterisation (u, v) of two Bezier patches",
+    "local": "local enhancement (1990 §5.2): the technical-illustration style on the nut only; "
+    "the ball keeps the plain shade",
+    "mirror": "an edge-enhanced planar mirror (2003 Fig. 8): the reflected nut and ball are "
+    "rendered and enhanced from the reflected eye, so they have their own profiles",
+}
+
+
+def npr_panels(window_size: tuple[int, int]) -> list[Panel]:
+    """NPR styles (2003 §5, 1990 §4.2, §5.2) on the nut, a torus and a mirrored scene."""
+    w, h = window_size
+    nut = load_nut()
+    cam = named_view_camera(nut.points, "iso", aspect=w / h)
+    gb = capture(nut, window_size=window_size, camera=cam, supersample=2)
+    torus = pv.ParametricTorus(texture_coordinates=True)
+    tcam = named_view_camera(torus.points, "iso", aspect=w / h)
+    tgb = capture(torus, window_size=window_size, camera=tcam, supersample=2)
+    sgb = capture(
+        seam_patches("C2").to_mesh(resolution=48), window_size=window_size, camera=SEAM_VIEW,
+        supersample=2,
+    )  # fmt: skip
+    centred = nut.translate([-c for c in nut.center])
+    pair = [centred.translate((-22.0, 0.0, 0.0)), pv.Sphere(radius=12.0, center=(22.0, 0.0, 0.0))]
+    pcam = named_view_camera(np.concatenate([d.points for d in pair]), "iso", aspect=w / h)
+    pgb = capture(pair, window_size=window_size, camera=pcam, supersample=2)
+    plain = np.repeat(shade_image(pgb)[..., None], 3, axis=2)
+    panels = {
+        "gooch": styles.gooch(gb),
+        "toon": styles.toon(gb),
+        "toon_smooth": styles.toon(gb, smooth=0.12),
+        "hatch": styles.hatch(gb),
+        "lines_shuv": styles.line_drawing(tgb, combo="shuv"),
+        "hatch_uv": styles.hatch(sgb, space="uv"),
+        "local": styles.local_style(styles.gooch(pgb), plain, pgb, ids=[0]),
+        "mirror": styles.mirror_enhance(
+            mirror_scene(), 0, camera=MIRROR_CAMERA, window_size=window_size
+        ),
+    }
+    titles = {"gooch": "Gooch", "toon": "toon", "toon_smooth": "toon, smoothed"}
+    titles |= {"hatch": "hatching", "lines_shuv": "(shuv) line drawing", "hatch_uv": "uv hatching"}
+    titles |= {"local": "local (nut only)", "mirror": "mirror"}
+    return [(k, titles[k], v) for k, v in panels.items()]
+
+
+def _npr_figures(window_size: tuple[int, int]) -> list[_Figure]:
+    return [
+        _Figure(
+            "npr",
+            "NPR styles: Nienhaus & Döllner 2003 §5 (Figs. 7-9), Saito & Takahashi 1990 §4.2, §5.2",
+            "Each scene is captured once (2x supersampled); every style is then a function of "
+            "the G-buffer: technical illustration, cartoon shading with and without smoothed "
+            "transitions, halftone hatching in screen space and along (u, v), the 1990 line "
+            "drawing, a style applied to one object only, and a mirror whose reflected view "
+            "has its own G-buffer and edges. sciviz-gbuf mesh FILE --style gooch|toon|hatch|"
+            "lines does the same for any mesh file.",
+            partial(npr_panels, window_size),
+            NPR_CAPTIONS,
+            "captures and styles",
+        )
+    ]
+
+
 def _write_figure(
     fig: _Figure, outdir: Path, window_size: tuple[int, int], progress_bar: bool
 ) -> None:
@@ -536,7 +616,8 @@ def run_demo(
         ``.npz``; then one PNG per panel of the 1990 Fig. 3 and Fig. 7 edge figures and of the
         Fig. 5, Fig. 6 and Fig. 11 contour figures and of the terrain figures (a topographic
         map, the Fig. 12 bird's-eye maps, the Fig. 13 sumi-e) and of the Fig. 14 medical
-        figure (the frog's skeleton) and the Fig. 15 surface analysis, with a montage each
+        figure (the frog's skeleton), the Fig. 15 surface analysis and the NPR styles, with a
+        montage each
         (``fig<n>_<key>.png``, ``fig<n>_montage.png``); finally ``index.html``.
     """
     width, height = _check_window_size(window_size)
@@ -547,7 +628,7 @@ def run_demo(
         _write_scene(scene, out, (width, height), progress_bar)
     figures = _edge_figures() + _contour_figures(max(16, min(width, height, CONTOUR_SIZE)))
     figures += _terrain_figures((width, height)) + _medical_figures((width, height))
-    figures += _surface_figures((width, height))
+    figures += _surface_figures((width, height)) + _npr_figures((width, height))
     for fig in figures:
         _write_figure(fig, out, (width, height), progress_bar)
     files = [p for s in scenes for p in s.files] + [p for f in figures for _, p in f.images]

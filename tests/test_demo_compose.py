@@ -274,7 +274,8 @@ def test_run_demo_files(demo):
     # terrain figure: topographic map, Fig. 12 cn, pr, sh, mx2, mx4, Fig. 13 sumi-e + montage;
     # the medical figure: Fig. 14 (a), (b), pr, cn, sh, bands + montage; the surface analysis
     # figure: Fig. 15 contours, reflection lines C1/C2, zebra C1/C2, curvature C1/C2, isophotes
-    assert len(pngs) == 2 * 11 + 1 + 8 + 9 + 6 + 4 + 8 + 8 + 7 + 9
+    # and the NPR figure: 8 styles + montage
+    assert len(pngs) == 2 * 11 + 1 + 8 + 9 + 6 + 4 + 8 + 8 + 7 + 9 + 9
     for p in files:
         assert p.is_file() and p.stat().st_size > 0
     contour_figures = ("fig5_", "fig6_", "fig11_")
@@ -339,8 +340,8 @@ def test_run_demo_edge_figures(demo):
         assert f"fig7_{key}.png" in names
     page = (outdir / "index.html").read_text(encoding="utf-8")
     assert "Fig. 3" in page and "Fig. 7" in page
-    # scenes; edge, contour, terrain, medical and surface figures
-    assert page.count("Timings:") == 2 + 2 + 3 + 1 + 1 + 1
+    # scenes; edge, contour, terrain, medical, surface and NPR figures
+    assert page.count("Timings:") == 2 + 2 + 3 + 1 + 1 + 1 + 1
 
     def grey(name):
         with Image.open(outdir / name) as im:

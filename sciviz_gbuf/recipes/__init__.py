@@ -20,7 +20,7 @@ from .contour_figures import (
     fig11_panels,
     write_panels,
 )
-from .framing import framed_camera, oblique_camera, terrain_birdseye_camera
+from .framing import framed_camera, named_view_camera, oblique_camera, terrain_birdseye_camera
 from .illustration import STYLES, fig7_edge_map, illustrate, shade_image, signed_to_grey
 from .medical import ct_enhance, ct_gbuffer, ct_layers, ct_panels, ct_surface, view_camera
 from .saito1990 import CAPTIONS, fig3_panels, fig7_panels, nut_camera
@@ -48,6 +48,7 @@ __all__ = [
     "fig11_panels",
     "framed_camera",
     "illustrate",
+    "named_view_camera",
     "nice_intervals",
     "nut_camera",
     "oblique_camera",

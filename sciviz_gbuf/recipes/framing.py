@@ -8,7 +8,7 @@ import numpy as np
 
 from ..errors import InputError
 
-__all__ = ["framed_camera", "oblique_camera", "terrain_birdseye_camera"]
+__all__ = ["framed_camera", "named_view_camera", "oblique_camera", "terrain_birdseye_camera"]
 
 _AXES = {"x": 0, "y": 1, "z": 2}
 
@@ -172,3 +172,15 @@ def terrain_birdseye_camera(
     return framed_camera(
         bounds, to_eye, (0.0, 0.0, 1.0), view_angle=view_angle, aspect=aspect, margin=margin
     )
+
+
+def named_view_camera(points: np.ndarray, view: str, *, aspect: float = 4 / 3) -> Camera:
+    """PyVista's named view (``"iso"``, ``"xy"``, ... as :func:`~sciviz_gbuf.capture` takes
+    them) framed tightly on ``points`` rather than on their bounding sphere, so the object fills
+    the picture (VTK's default 30 degree view angle)."""
+    from ..camera import VIEWS
+
+    if view not in VIEWS:
+        raise InputError(f"view: expected one of {sorted(VIEWS)}, got {view!r}")
+    direction, up = VIEWS[view]
+    return framed_camera((), direction, up, aspect=aspect, points=points)

@@ -24,7 +24,7 @@ from ..filters import contour_lines, lambert, profile_edges
 from ..filters.reflection import isophotes, reflection_lines
 from ..gbuffer import GBuffer
 from .birdseye import _rgba
-from .framing import framed_camera
+from .framing import named_view_camera
 from .terrain import _round_up
 
 __all__ = [
@@ -151,10 +151,7 @@ def surface_gbuffer(
     mesh = _surface(source, resolution)
     w, h = (int(v) for v in window_size)
     if isinstance(view, str) and view in VIEWS:
-        # PyVista's named views, but framed on the surface itself rather than on its bounding
-        # sphere, so the object fills the picture.
-        direction, up = VIEWS[view]
-        view = framed_camera((), direction, up, aspect=w / max(h, 1), points=mesh.points)
+        view = named_view_camera(mesh.points, view, aspect=w / max(h, 1))
     wanted = [a for a in (*_CURVATURE_ARRAYS.values(), "patch_id") if a in mesh.array_names]
     return capture(
         mesh,

@@ -1,0 +1,236 @@
+"""Line drawing illustrations and their photocopies (Saito & Takahashi 1990 §4.2, Figs. 9-10).
+
+Fig. 9 composes an illustration from G-buffers: the shaded image ``sh`` from the normals, the
+profile image ``pr`` from ``sz``, and curved hatching ``cu`` / ``cv`` (§3.4, Eq. 17-21) of the
+``u`` and ``v`` G-buffers; "enhancing the hatching images with the sh image and composing with
+the pr image" gives ``shu``, ``shv`` and ``shuv``.
+
+Fig. 10 makes the case for line drawings: copied five times on an inexpensive copy machine, the
+``sh`` image is ruined while ``cv`` keeps almost its original quality. :func:`photocopy` is a
+model of such a machine, so that the claim can be tested.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from scipy import ndimage
+
+from ..errors import InputError
+from ..filters import hatching, lambert, profile_edges
+from ..gbuffer import GBuffer
+from ..recipes.illustration import LIGHT
+
+__all__ = ["COMBOS", "TONE_FULL", "TONE_NONE", "line_drawing", "modulation", "photocopy"]
+
+#: The images of 1990 Fig. 9 that :func:`line_drawing` makes, with what each one holds.
+COMBOS = {
+    "sh": "Lambert shade of the normals (the shaded image)",
+    "pr": "profile lines from sz",
+    "cu": "curved hatching of the u buffer",
+    "cv": "curved hatching of the v buffer",
+    "shu": "u hatching enhanced with sh, composed with pr",
+    "shv": "v hatching enhanced with sh, composed with pr",
+    "shuv": "u and v hatching enhanced with sh, composed with pr",
+}
+#: Tone ``1 - sh`` below which the enhanced hatching has no ink (highlights stay paper) ...
+TONE_NONE = 0.1
+#: ... and above which its lines are drawn in full.
+TONE_FULL = 0.7
+
+
+def _positive(value, name: str) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"{name}: expected a finite number > 0, got {value!r}") from None
+    if not (np.isfinite(v) and v > 0):
+        raise InputError(f"{name}: expected a finite number > 0, got {value!r}")
+    return v
+
+
+def modulation(shade: np.ndarray) -> np.ndarray:
+    """How strongly the hatching is drawn at a shade: the "enhancing with sh" of Fig. 9.
+
+    A smoothstep of the tone ``1 - sh`` from :data:`TONE_NONE` (0: lit, no lines) to
+    :data:`TONE_FULL` (1: full lines); NaN shade (background) gives 0.
+    """
+    t = np.float32(1.0) - np.nan_to_num(np.asarray(shade, dtype=np.float32), nan=1.0)
+    x = np.clip((t - np.float32(TONE_NONE)) / np.float32(TONE_FULL - TONE_NONE), 0.0, 1.0)
+    return (x * x * (np.float32(3.0) - np.float32(2.0) * x)).astype(np.float32)
+
+
+def _hatch(gb: GBuffer, index: int, spacing: float, width: float) -> np.ndarray:
+    """Curved hatching (Eq. 17-21) of ``gb.uv[..., index]`` at the buffer resolution."""
+    k = gb.supersample
+    field = np.where(gb.mask, gb.uv[..., index], np.nan).astype(np.float32)
+    return hatching(field, spacing=spacing * k, width=width * k, mask=gb.mask)
+
+
+def _enhanced(gb: GBuffer, index: int, spacing: float, width: float, m: np.ndarray):
+    """Hatching whose lines thin out and fade with the light, at the buffer resolution.
+
+    Where ``m`` (see :func:`modulation`) is 1 the lines are ``width`` wide; down to ``m = 0.5``
+    they narrow to half that width (a blend of the two antialiased line images, which moves
+    the line's edges); below, the thin line fades out. Narrowing first keeps the lines crisp
+    (black), which is what survives copying (Fig. 10); only the lightest tones get faint ink.
+    """
+    full = _hatch(gb, index, spacing, width)
+    thin = _hatch(gb, index, spacing, 0.5 * width)
+    a = np.clip(2.0 * m - 1.0, 0.0, 1.0)
+    return np.where(m >= 0.5, thin + a * (full - thin), 2.0 * m * thin).astype(np.float32)
+
+
+def line_drawing(
+    gb: GBuffer,
+    *,
+    combo: str = "shuv",
+    spacing: float = 6.0,
+    width: float = 1.0,
+    light: Sequence[float] = LIGHT,
+    profile_width: float = 1.5,
+) -> np.ndarray:
+    """One image of the 1990 Fig. 9 line drawing illustration (§4.2, hatching §3.4).
+
+    Parameters
+    ----------
+    gb : GBuffer
+        Needs ``gb.uv`` (the paper's ``ou``, ``ov`` buffers) for every combo with u or v.
+    combo : {"sh", "pr", "cu", "cv", "shu", "shv", "shuv"}, default: "shuv"
+        ``sh``: the Lambert shade of the normals (the shaded image, not a line drawing);
+        ``pr``: black profile lines (:func:`~sciviz_gbuf.filters.profile_edges`);
+        ``cu`` / ``cv``: curved hatching (:func:`~sciviz_gbuf.filters.hatching`, Eq. 17-21)
+        of ``u`` / ``v`` at the buffer resolution, alone as in Fig. 9;
+        ``shu`` / ``shv`` / ``shuv``: that hatching "enhanced with sh" — full lines where the
+        tone ``1 - sh`` exceeds :data:`TONE_FULL`, thinner lines in half-tones, fading to no
+        ink below :data:`TONE_NONE` (see :func:`modulation`) — composed with ``pr``.
+        Ink of overlapping lines is combined with ``max``.
+    spacing : float > 0, default: 6
+        ``d_i`` of Eq. 18-20: on-screen hatch spacing in output pixels.
+    width : float > 0, default: 1
+        Hatch line width in output pixels.
+    light : 3 floats, default: ``LIGHT`` (upper left)
+        Eye-space direction towards the light of ``sh``.
+    profile_width : float >= 1, default: 1.5
+        Width of the profile lines in output pixels.
+
+    Returns
+    -------
+    (H, W) float32 grey in [0, 1] at ``gb.output_shape``; 1 is paper (also the background).
+    """
+    if not isinstance(gb, GBuffer):
+        raise InputError(f"gb: expected a GBuffer, got {type(gb).__name__}")
+    if combo not in COMBOS:
+        raise InputError(f"combo: expected one of {sorted(COMBOS)}, got {combo!r}")
+    sp = _positive(spacing, "spacing")
+    wd = _positive(width, "width")
+    pw = _positive(profile_width, "profile_width")
+    if pw < 1:
+        raise InputError(f"profile_width: expected a width >= 1 pixel, got {profile_width!r}")
+    needs_uv = "u" in combo or "v" in combo
+    if needs_uv and gb.uv is None:
+        raise InputError(f"combo: {combo!r} needs texture coordinates (u, v), but gb.uv is None")
+    shade = lambert(gb.normal, light=light, mask=gb.mask)  # validates light; NaN off the mask
+    if combo == "sh":
+        return np.clip(gb.downsample(np.where(gb.mask, shade, 1.0)), 0, 1).astype(np.float32)
+    prof = profile_edges(gb, width=pw)
+    if combo == "pr":
+        return (1.0 - prof).astype(np.float32)
+    if combo in ("cu", "cv"):
+        ink = gb.downsample(_hatch(gb, "uv".index(combo[1]), sp, wd))
+        return np.clip(1.0 - ink, 0.0, 1.0).astype(np.float32)
+    m = modulation(shade)
+    ink = prof
+    for name in combo[2:]:
+        ink = np.maximum(ink, gb.downsample(_enhanced(gb, "uv".index(name), sp, wd, m)))
+    return np.clip(1.0 - ink, 0.0, 1.0).astype(np.float32)
+
+
+def _tone_curve(x: np.ndarray, pivot: float, contrast: float) -> np.ndarray:
+    """Normalised logistic: 0 -> 0, 1 -> 1, steepest at ``pivot``."""
+
+    def logistic(z):
+        return 1.0 / (1.0 + np.exp(-contrast * (z - pivot)))
+
+    lo, hi = logistic(0.0), logistic(1.0)
+    return (logistic(x) - lo) / (hi - lo)
+
+
+def photocopy(
+    image: np.ndarray,
+    *,
+    copies: int = 5,
+    blur: float = 0.5,
+    pivot: float = 0.55,
+    contrast: float = 10.0,
+    noise: float = 0.01,
+    seed: int | None = None,
+) -> np.ndarray:
+    """A model of an inexpensive copy machine, applied ``copies`` times (1990 Fig. 10).
+
+    Each copy (of the previous copy) goes through
+
+    1. toner spread: a Gaussian blur of ``blur`` pixels (standard deviation);
+    2. the copier's tone curve: a normalised logistic, steepest at the grey ``pivot``
+       (``0 -> 0``, ``1 -> 1``). Copiers reproduce black and paper but not tones: with the
+       default contrast greys darker than about the pivot end up darker, lighter ones lighter
+       (the slope at the pivot is ~2.5, so mid-tone differences grow 2.5-fold per copy and
+       their gradation is crushed into black and paper); a pivot a little above mid grey
+       models toner that darkens, so thin antialiased lines are regenerated rather than lost;
+    3. sensor noise: Gaussian, standard deviation ``noise`` (seeded RNG);
+    4. 8-bit re-quantisation.
+
+    Parameters
+    ----------
+    image : (H, W) or (H, W, C) array in [0, 1]
+        Grey (1 = paper) or colour, copied per channel.
+    copies : int >= 0, default: 5
+        Generations (0 returns the image, clipped to [0, 1] and quantised to 8 bits).
+    blur : float >= 0, default: 0.5
+        Toner spread in pixels. Lines narrower than about three times ``blur`` fade a little
+        in each copy and lose their ends (blur + threshold is a curvature flow); with 1-pixel
+        lines ``blur`` above ~0.55 erases them within five copies.
+    pivot : float in (0, 1), default: 0.55
+        Grey level where the tone curve is steepest.
+    contrast : float > 0, default: 10
+        Steepness of the logistic (slope at the pivot ~ ``contrast / 4``).
+    noise : float >= 0, default: 0.01
+        Standard deviation of the noise added in each copy.
+    seed : int, optional
+        Seed of the noise; the same seed gives the same copies.
+
+    Returns
+    -------
+    float32 array shaped like ``image``, in [0, 1], multiples of 1/255.
+    """
+    img = np.asarray(image, dtype=np.float64)
+    if img.ndim not in (2, 3) or img.size == 0:
+        raise InputError(f"image: expected an (H, W) or (H, W, C) array, got shape {img.shape}")
+    if not np.all(np.isfinite(img)):
+        raise InputError("image: contains NaN or inf")
+    if isinstance(copies, bool) or not isinstance(copies, (int, np.integer)) or copies < 0:
+        raise InputError(f"copies: expected an integer >= 0, got {copies!r}")
+    try:
+        bl, pv, ct, nz = float(blur), float(pivot), float(contrast), float(noise)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"blur/pivot/contrast/noise: expected numbers ({exc})") from None
+    if not (np.isfinite(bl) and bl >= 0):
+        raise InputError(f"blur: expected a finite number >= 0, got {blur!r}")
+    if not (np.isfinite(pv) and 0 < pv < 1):
+        raise InputError(f"pivot: expected a grey level in (0, 1), got {pivot!r}")
+    if not (np.isfinite(ct) and ct > 0):
+        raise InputError(f"contrast: expected a finite number > 0, got {contrast!r}")
+    if not (np.isfinite(nz) and nz >= 0):
+        raise InputError(f"noise: expected a finite number >= 0, got {noise!r}")
+    rng = np.random.default_rng(seed)
+    sigma = (bl, bl) + (0.0,) * (img.ndim - 2)  # blur across the page, not across channels
+    out = np.round(np.clip(img, 0.0, 1.0) * 255.0) / 255.0
+    for _ in range(int(copies)):
+        if bl > 0:
+            out = ndimage.gaussian_filter(out, sigma=sigma, mode="nearest")
+        out = _tone_curve(out, pv, ct)
+        if nz > 0:
+            out = out + rng.normal(0.0, nz, size=out.shape)
+        out = np.round(np.clip(out, 0.0, 1.0) * 255.0) / 255.0
+    return out.astype(np.float32)

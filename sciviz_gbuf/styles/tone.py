@@ -1,0 +1,318 @@
+"""Tone-based NPR styles on a G-buffer, combined with the 2003 edge map.
+
+* :func:`gooch`: the cool-to-warm technical-illustration shading of Gooch et al. (SIGGRAPH
+  1998) with white inner edges and black profiles, as in Nienhaus & Döllner (WSCG 2003) §5.1,
+  Fig. 7.
+* :func:`toon`: the cartoon shading of Lake et al. (NPAR 2000), a 1D shade texture indexed by
+  ``max(N.L, 0)`` with nearest lookup, optionally with smoothed colour transitions (the 2003
+  "cartoon map", §5, Fig. 9), and the 2003 edge map.
+
+Both shade at the buffer size from the eye-space normals and reduce to the output size
+(``gb.output_shape``), so silhouettes against the background are antialiased by coverage.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from ..compose import _background as _rgb
+from ..errors import InputError
+from ..filters import edge_map, enhance
+from ..gbuffer import GBuffer
+from ..recipes.illustration import LIGHT
+
+__all__ = ["MAX_LEVELS", "gooch", "toon"]
+
+#: Largest shade texture :func:`toon` accepts (texels).
+MAX_LEVELS = 256
+
+
+def _check_gbuffer(gb: object) -> GBuffer:
+    if not isinstance(gb, GBuffer):
+        raise InputError(
+            f"gb: expected a sciviz_gbuf.GBuffer (from capture() or GBuffer.load()), "
+            f"got {type(gb).__name__}"
+        )
+    return gb
+
+
+def _unit_light(light: object) -> np.ndarray:
+    try:
+        lv = np.asarray(light, dtype=np.float64).reshape(-1)
+    except (TypeError, ValueError):
+        lv = np.zeros(0)
+    if lv.size != 3 or not np.isfinite(lv).all() or not np.linalg.norm(lv) > 0:
+        raise InputError(f"light: expected a finite non-zero 3-vector (eye space), got {light!r}")
+    return (lv / np.linalg.norm(lv)).astype(np.float32)
+
+
+def _unit_interval(value: object, name: str) -> float:
+    try:
+        v = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        v = float("nan")
+    if isinstance(value, bool) or not 0.0 <= v <= 1.0:
+        raise InputError(f"{name}: expected a number in [0, 1], got {value!r}")
+    return v
+
+
+def _check_bool(value: object, name: str) -> bool:
+    if not isinstance(value, (bool, np.bool_)):
+        raise InputError(f"{name}: expected True or False, got {value!r}")
+    return bool(value)
+
+
+def _n_dot_l(gb: GBuffer, light: np.ndarray) -> np.ndarray:
+    """``N.L`` at buffer size, 0 where there is no surface (those pixels are replaced later)."""
+    n = np.nan_to_num(np.asarray(gb.normal, dtype=np.float32), nan=0.0)
+    return np.clip(n @ light, -1.0, 1.0).astype(np.float32, copy=False)
+
+
+def _finish(gb: GBuffer, colour: np.ndarray, background: np.ndarray) -> np.ndarray:
+    """Paper outside the mask, then the box filter to output size: silhouettes blend with the
+    background by coverage."""
+    rgb = np.where(gb.mask[..., None], colour, background[None, None, :]).astype(np.float32)
+    return np.clip(gb.downsample(rgb), 0.0, 1.0).astype(np.float32, copy=False)
+
+
+def _edges(
+    gb: GBuffer,
+    rgb: np.ndarray,
+    *,
+    operator: str,
+    crease_angle: float,
+    depth_jump: float,
+    width: float,
+    inner_color: np.ndarray | None,
+    profile_color: np.ndarray,
+) -> np.ndarray:
+    emap = edge_map(
+        gb, operator=operator, crease_angle=crease_angle, depth_jump=depth_jump, width=width
+    )
+    if inner_color is None:
+        # No inner edges: only the profiles are drawn.
+        emap[..., :3] = 0.0
+        inner_color = np.ones(3, dtype=np.float32)
+    return enhance(rgb, emap, inner_color=inner_color, profile_color=profile_color)
+
+
+def gooch(
+    gb: GBuffer,
+    *,
+    light: Sequence[float] = LIGHT,
+    base: Sequence[float] = (0.75, 0.75, 0.75),
+    warm: Sequence[float] = (0.4, 0.4, 0.0),
+    cool: Sequence[float] = (0.0, 0.0, 0.4),
+    alpha: float = 0.2,
+    beta: float = 0.6,
+    edges: bool = True,
+    operator: str = "diagonal",
+    crease_angle: float = 30.0,
+    depth_jump: float = 1.0,
+    width: float = 1.0,
+    inner_color: Sequence[float] = (1.0, 1.0, 1.0),
+    profile_color: Sequence[float] = (0.0, 0.0, 0.0),
+    background: Sequence[float] = (1.0, 1.0, 1.0),
+) -> np.ndarray:
+    """Cool-to-warm technical illustration (Gooch et al. 1998) with the 2003 edge map.
+
+    Per surface pixel, from the eye-space normal ``N`` and the unit light ``L``::
+
+        k_cool = cool + alpha * base
+        k_warm = warm + beta * base
+        t      = (1 + N.L) / 2
+        colour = t * k_warm + (1 - t) * k_cool        (clipped to [0, 1])
+
+    so the hue, not only the brightness, carries the orientation: surfaces facing the light are
+    warm, those facing away cool, and the whole range of ``N.L`` in [-1, 1] is used (no black
+    unlit side, which keeps black for the profiles). Then, if ``edges``, the edge map of
+    Nienhaus & Döllner (2003 §4) is composited with :func:`~sciviz_gbuf.filters.enhance`:
+    inner edges in ``inner_color`` (white), profiles in ``profile_color`` (black), as in 2003
+    §5.1, Fig. 7.
+
+    Parameters
+    ----------
+    gb : GBuffer
+    light : 3 floats, default: :data:`~sciviz_gbuf.recipes.illustration.LIGHT`
+        Eye-space direction towards the light (x right, y up, z towards the viewer).
+    base, warm, cool : RGB in [0, 1]
+        Object colour ``k_d`` and the blue/yellow tones of the paper (``b``, ``y``).
+    alpha, beta : float in [0, 1], default: 0.2, 0.6
+        How much of the object colour enters the cool and the warm tone.
+    edges : bool, default: True
+        Composite the 2003 edge map.
+    operator, crease_angle, depth_jump, width
+        As in :func:`sciviz_gbuf.filters.edge_map`.
+    inner_color, profile_color : RGB in [0, 1]
+        Colours of inner (crease) edges and profiles.
+    background : RGB in [0, 1], default: white
+        Paper colour, blended with the surface at the silhouette by coverage.
+
+    Returns
+    -------
+    (H, W, 3) float32 RGB in [0, 1] at ``gb.output_shape``.
+    """
+    gb = _check_gbuffer(gb)
+    lv = _unit_light(light)
+    base_c, warm_c, cool_c = _rgb(base, "base"), _rgb(warm, "warm"), _rgb(cool, "cool")
+    a = np.float32(_unit_interval(alpha, "alpha"))
+    b = np.float32(_unit_interval(beta, "beta"))
+    inner_c, prof_c = _rgb(inner_color, "inner_color"), _rgb(profile_color, "profile_color")
+    bg = _rgb(background, "background")
+    edges = _check_bool(edges, "edges")
+
+    k_cool = cool_c + a * base_c
+    k_warm = warm_c + b * base_c
+    t = ((1.0 + _n_dot_l(gb, lv)) * 0.5)[..., None]
+    colour = np.clip(t * k_warm + (1.0 - t) * k_cool, 0.0, 1.0)
+    rgb = _finish(gb, colour, bg)
+    if not edges:
+        return rgb
+    return _edges(
+        gb,
+        rgb,
+        operator=operator,
+        crease_angle=crease_angle,
+        depth_jump=depth_jump,
+        width=width,
+        inner_color=inner_c,
+        profile_color=prof_c,
+    )
+
+
+def _shade_table(levels: object, base: np.ndarray) -> np.ndarray:
+    """The 1D shade texture as an (n, 3) float32 colour table, darkest texel first."""
+    expected = (
+        f"an int in [1, {MAX_LEVELS}], a sequence of 1..{MAX_LEVELS} shades in [0, 1] or an "
+        f"(n, 3) table of RGB colours in [0, 1]"
+    )
+    if isinstance(levels, (bool, np.bool_)):
+        raise InputError(f"levels: expected {expected}, got {levels!r}")
+    if isinstance(levels, (int, np.integer)):
+        k = int(levels)
+        if not 1 <= k <= MAX_LEVELS:
+            raise InputError(f"levels: expected {expected}, got {levels!r}")
+        # k shades evenly spaced in (0, 1]: 1/k (darkest) ... 1 (full base colour)
+        shades = np.arange(1, k + 1, dtype=np.float64) / k
+        return (shades[:, None] * base[None, :]).astype(np.float32)
+    try:
+        arr = np.asarray(levels, dtype=np.float64)
+    except (TypeError, ValueError):
+        arr = np.zeros((0,))
+    ok_range = arr.size > 0 and bool(np.all((arr >= 0.0) & (arr <= 1.0)))
+    if arr.ndim == 1 and 1 <= arr.size <= MAX_LEVELS and ok_range:
+        return (arr[:, None] * base[None, :]).astype(np.float32)
+    if arr.ndim == 2 and arr.shape[1] == 3 and 1 <= arr.shape[0] <= MAX_LEVELS and ok_range:
+        return arr.astype(np.float32)
+    raise InputError(f"levels: expected {expected}, got {levels!r}")
+
+
+def _smoothstep(x: np.ndarray) -> np.ndarray:
+    x = np.clip(x, 0.0, 1.0)
+    return x * x * (3.0 - 2.0 * x)
+
+
+def toon(
+    gb: GBuffer,
+    *,
+    light: Sequence[float] = LIGHT,
+    levels: int | Sequence[float] | Sequence[Sequence[float]] = 3,
+    base: Sequence[float] = (0.9, 0.55, 0.3),
+    smooth: float = 0.0,
+    edges: bool = True,
+    operator: str = "diagonal",
+    crease_angle: float = 30.0,
+    depth_jump: float = 1.0,
+    width: float = 1.0,
+    inner_color: Sequence[float] | None = (0.0, 0.0, 0.0),
+    profile_color: Sequence[float] = (0.0, 0.0, 0.0),
+    background: Sequence[float] = (1.0, 1.0, 1.0),
+) -> np.ndarray:
+    """Cartoon shading (Lake et al. 2000) with the 2003 edge map (Nienhaus & Döllner 2003 §5).
+
+    A 1D shade texture of ``n`` texels is indexed by ``s = max(N.L, 0)`` with nearest lookup,
+    texel ``i = min(floor(n s), n - 1)``: the surface falls into ``n`` flat colour patches,
+    darker away from the light, with hard transitions at ``s = j / n`` (j = 1 .. n-1).
+
+    ``smooth > 0`` is the 2003 "cartoon map" variant (Fig. 9: "sampling neighbouring colour
+    values smoothes colour transition"), done analytically in the texture coordinate instead of
+    by resampling the image: across each threshold ``j / n`` the colour ramps from texel
+    ``j - 1`` to texel ``j`` with a smoothstep over ``|s - j / n| < smooth / 2``. The width is
+    therefore in units of ``N.L`` (not pixels): on screen the ramp is wide where ``N.L``
+    changes slowly and narrow near silhouettes. Outside the ramps the colours are exactly the
+    texels, and with a monotone texture the result stays monotone in ``N.L``. With
+    ``supersample > 1`` the transitions are in addition box-filtered by the downsampling.
+
+    Parameters
+    ----------
+    gb : GBuffer
+    light : 3 floats, default: :data:`~sciviz_gbuf.recipes.illustration.LIGHT`
+        Eye-space direction towards the light.
+    levels : int, sequence of floats or (n, 3) array, default: 3
+        The shade texture. An int ``k``: shades ``1/k, 2/k, ..., 1`` times ``base``. A sequence
+        of shades in [0, 1] (darkest first, for ``s`` from 0 to 1): multiplied by ``base``. An
+        (n, 3) table: RGB colours in [0, 1] used as they are (``base`` is ignored). At most
+        :data:`MAX_LEVELS` texels.
+    base : RGB in [0, 1], default: orange
+        Fully lit material colour.
+    smooth : float in [0, 1], default: 0
+        Width, in units of ``N.L``, of the smoothed transitions; 0 keeps them hard.
+    edges : bool, default: True
+        Composite the 2003 edge map.
+    operator, crease_angle, depth_jump, width
+        As in :func:`sciviz_gbuf.filters.edge_map`.
+    inner_color : RGB in [0, 1] or None, default: black
+        Colour of inner (crease) edges; None draws no inner edges.
+    profile_color : RGB in [0, 1], default: black
+    background : RGB in [0, 1], default: white
+
+    Returns
+    -------
+    (H, W, 3) float32 RGB in [0, 1] at ``gb.output_shape``.
+    """
+    gb = _check_gbuffer(gb)
+    lv = _unit_light(light)
+    table = _shade_table(levels, _rgb(base, "base"))
+    try:
+        sm = float(smooth)
+    except (TypeError, ValueError):
+        sm = float("nan")
+    if isinstance(smooth, bool) or not 0.0 <= sm <= 1.0:
+        raise InputError(f"smooth: expected a width in units of N.L in [0, 1], got {smooth!r}")
+    inner_c = None if inner_color is None else _rgb(inner_color, "inner_color")
+    prof_c = _rgb(profile_color, "profile_color")
+    bg = _rgb(background, "background")
+    edges = _check_bool(edges, "edges")
+
+    n = table.shape[0]
+    s = np.maximum(_n_dot_l(gb, lv), np.float32(0.0))
+    idx = np.minimum((s * np.float32(n)).astype(np.intp), n - 1)
+    colour = table[idx]
+    if sm > 0.0 and n > 1:
+        # Correct the nearest lookup only inside the ramps, so that outside them the colours
+        # stay exactly the texels: add d_j (smoothstep - step) for each threshold j / n.
+        half = np.float32(0.5 * sm)
+        for j in range(1, n):  # a loop over texels, each step vectorised over the image
+            tau = np.float32(j / n)
+            near = np.abs(s - tau) < half
+            if not near.any():
+                continue
+            # the step is taken from the lookup itself, so both agree exactly at the threshold
+            ramp = _smoothstep((s[near] - (tau - half)) / np.float32(sm)) - (idx[near] >= j)
+            colour[near] += ramp[:, None].astype(np.float32) * (table[j] - table[j - 1])
+        colour = np.clip(colour, 0.0, 1.0)
+    rgb = _finish(gb, colour, bg)
+    if not edges:
+        return rgb
+    return _edges(
+        gb,
+        rgb,
+        operator=operator,
+        crease_angle=crease_angle,
+        depth_jump=depth_jump,
+        width=width,
+        inner_color=inner_c,
+        profile_color=prof_c,
+    )
