@@ -30,6 +30,10 @@ def test_readme_python_example_runs(tmp_path, monkeypatch):
     surface = next(ns for ns in spaces if "zebra" in ns)
     assert surface["zebra"].shape == (360, 480) and surface["lines"].max() > 0.9
     assert (tmp_path / "zebra.png").is_file()
+    npr = next(ns for ns in spaces if "cartoon" in ns)
+    assert npr["tech"].shape == npr["cartoon"].shape == npr["ink"].shape == (360, 480, 3)
+    assert npr["drawing"].shape == npr["copied"].shape == (360, 480)
+    assert (tmp_path / "nut_gooch.png").is_file()
 
 
 def test_quick_start_has_two_commands_and_ci_runs_the_test_one():
