@@ -32,3 +32,7 @@ __all__ = [
     "surface_analysis",
     "topographic_map",
 ]
+
+# Register PyVista's ``.gbuf`` dataset accessor and plotter component (also declared as entry
+# points, so ``pv.Sphere().gbuf`` works without this import; idempotent).
+from . import pyvista_plugin as _pyvista_plugin  # noqa: F401

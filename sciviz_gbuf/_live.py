@@ -1,0 +1,335 @@
+"""Live edge enhancement of a PyVista renderer: an edge-map overlay refreshed per frame.
+
+Why not a render pass: PyVista installs its own passes with ``renderer.SetPass`` (SSAO, EDL,
+shadows, depth peeling) and overwrites ours. Instead, every time the render window starts a
+frame (its ``StartEvent``) we check whether the view or the scene of the enhanced renderer
+changed since the last frame; if so we capture that renderer's scene offscreen in a *separate*
+window (:func:`sciviz_gbuf.capture`, its own render window, so no re-entry into the user's),
+compute the edge map and upload it as an RGBA image. The image is drawn by a ``vtkActor2D``
+(``vtkImageMapper``, one texel per pixel) in an overlay ``vtkRenderer`` on a new top layer with
+the enhanced renderer's viewport: so it is composited (alpha blending) over exactly that
+subplot, in every frame the window renders: interactive windows, ``show()``, ``screenshot()``
+and views that stream this window's frames (trame's server-side rendering; a client-side
+vtk.js view re-renders the scene in the browser and would not run the observer). ``detach``
+removes the observer, the renderer and the extra layer, so the window renders bit for bit as
+before.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from vtkmodules.util.numpy_support import numpy_to_vtk
+from vtkmodules.vtkCommonDataModel import vtkImageData
+from vtkmodules.vtkRenderingCore import vtkActor2D, vtkImageMapper, vtkRenderer
+
+from .capture import capture
+from .errors import InputError
+from .filters import crease_edges, edge_map, profile_edges
+from .gbuffer import GBuffer
+from .recipes.illustration import fig7_edge_map
+
+__all__ = ["LIVE_STYLES", "EdgeParams", "LiveEdges", "overlay_rgba"]
+
+#: Styles of the live overlay (an RGBA image composited over the normal rendering).
+LIVE_STYLES = {
+    "enhance": "inner edges in inner_color, profiles in profile_color (2003 edge map)",
+    "profile": "profiles (silhouettes, borders, occlusions) only, in profile_color",
+    "lines": "profile and crease lines, all in profile_color",
+    "fig7": "convex edges in inner_color; concave edges and profiles in profile_color (1990)",
+}
+
+
+def _color(value: object, name: str) -> tuple[float, float, float]:
+    try:
+        rgb = tuple(float(v) for v in value)  # type: ignore[union-attr]
+    except (TypeError, ValueError):
+        rgb = ()
+    if len(rgb) != 3 or not all(0.0 <= v <= 1.0 for v in rgb):
+        raise InputError(f"{name}: expected three floats in [0, 1] (RGB), got {value!r}")
+    return rgb  # type: ignore[return-value]
+
+
+def _positive(value: object, name: str, low: float, high: float = np.inf) -> float:
+    try:
+        v = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        v = np.nan
+    if isinstance(value, bool) or not (low <= v <= high):
+        raise InputError(f"{name}: expected a number in [{low}, {high}], got {value!r}")
+    return v
+
+
+@dataclass(frozen=True)
+class EdgeParams:
+    """Validated parameters of the live overlay (see ``enable_edge_enhancement``)."""
+
+    style: str = "enhance"
+    operator: str = "diagonal"
+    crease_angle: float = 30.0
+    depth_jump: float = 1.0
+    width: float = 1.0
+    supersample: int = 1
+    inner_color: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    profile_color: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    opacity: float = 1.0
+
+    @classmethod
+    def checked(
+        cls,
+        *,
+        style: str,
+        operator: str,
+        crease_angle: float,
+        depth_jump: float,
+        width: float,
+        supersample: int,
+        inner_color: Sequence[float],
+        profile_color: Sequence[float],
+        opacity: float,
+    ) -> EdgeParams:
+        """Validate everything up front: a bad value must fail at the call, not mid-frame."""
+        if style not in LIVE_STYLES:
+            raise InputError(f"style: expected one of {sorted(LIVE_STYLES)}, got {style!r}")
+        if operator not in ("diagonal", "c1"):
+            raise InputError(f"operator: expected 'diagonal' or 'c1', got {operator!r}")
+        if (
+            isinstance(supersample, bool)
+            or not isinstance(supersample, (int, np.integer))
+            or not 1 <= supersample <= 4
+        ):
+            raise InputError(f"supersample: expected an integer in [1, 4], got {supersample!r}")
+        return cls(
+            style=style,
+            operator=operator,
+            crease_angle=_positive(crease_angle, "crease_angle", 1e-6, 180.0),
+            depth_jump=_positive(depth_jump, "depth_jump", 1e-6),
+            width=_positive(width, "width", 1.0, 64.0),
+            supersample=int(supersample),
+            inner_color=_color(inner_color, "inner_color"),
+            profile_color=_color(profile_color, "profile_color"),
+            opacity=_positive(opacity, "opacity", 0.0, 1.0),
+        )
+
+
+def overlay_rgba(gb: GBuffer, params: EdgeParams) -> np.ndarray:
+    """The overlay image of a G-buffer: (H, W, 4) float32, straight (not premultiplied) alpha.
+
+    Compositing it over an image with ``src * a + dst * (1 - a)`` equals
+    :func:`sciviz_gbuf.filters.enhance` of that image with the style's edge map: inner edges
+    first (``lerp(dst, inner_color, R)``), then the profiles (``lerp(., profile_color, A)``).
+    """
+    opts = {"crease_angle": params.crease_angle, "depth_jump": params.depth_jump}
+    if params.style == "enhance":
+        emap = edge_map(gb, operator=params.operator, width=params.width, **opts)
+        inner, prof = emap[..., 0], emap[..., 3]
+    elif params.style == "profile":
+        emap = edge_map(gb, operator=params.operator, width=params.width, **opts)
+        inner, prof = np.zeros_like(emap[..., 0]), emap[..., 3]
+    elif params.style == "lines":
+        prof = np.maximum(
+            profile_edges(gb, depth_jump=params.depth_jump, width=params.width),
+            crease_edges(gb, width=params.width, **opts),
+        )
+        inner = np.zeros_like(prof)
+    else:  # fig7
+        emap = fig7_edge_map(gb, width=params.width, **opts)
+        inner, prof = emap[..., 0], emap[..., 3]
+    h, w = inner.shape
+    out = np.zeros((h, w, 4), np.float32)
+    # Only inked pixels need work (a few per cent of a frame): gather them, compose, scatter.
+    ink = np.flatnonzero((np.nan_to_num(inner) > 0) | (np.nan_to_num(prof) > 0))
+    i = np.clip(inner.reshape(-1)[ink], 0.0, 1.0).astype(np.float32) * params.opacity
+    p = np.clip(prof.reshape(-1)[ink], 0.0, 1.0).astype(np.float32) * params.opacity
+    alpha = i + p - i * p  # 1 - (1 - i)(1 - p): inner edges first, profiles over them
+    premult = np.outer(p, params.profile_color) + np.outer(i * (1.0 - p), params.inner_color)
+    flat = out.reshape(-1, 4)
+    flat[ink, :3] = premult / np.maximum(alpha, 1e-12)[:, None]
+    flat[ink, 3] = alpha
+    return out
+
+
+def _activate(renderers: Any, index: int) -> None:
+    """Make renderer ``index`` (flat) the active one (the API wants a (row, column) for grids)."""
+    loc = np.atleast_1d(renderers.index_to_loc(int(index)))
+    renderers.set_active_renderer(*(int(v) for v in loc))
+
+
+class LiveEdges:
+    """The live overlay of one renderer (subplot) of one plotter.
+
+    Parameters
+    ----------
+    plotter : pyvista.BasePlotter
+    renderer : pyvista.Renderer
+        The subplot to enhance; only its viewport gets the overlay.
+    params : EdgeParams
+    """
+
+    def __init__(self, plotter: Any, renderer: Any, params: EdgeParams) -> None:
+        self._plotter = plotter
+        self._renderer = renderer
+        self.params = params
+        self._key: object = None
+        self._busy = False
+        #: Number of G-buffer captures so far (to check that still frames cost nothing).
+        self.updates = 0
+        self.last_gbuffer: GBuffer | None = None
+        self._image = vtkImageData()
+        self._image.SetDimensions(1, 1, 1)
+        self._set_pixels(np.zeros((1, 1, 4), np.uint8))
+        mapper = vtkImageMapper()
+        mapper.SetInputData(self._image)
+        # unsigned char through window 255 / level 127.5 is the identity: texels are pixels
+        mapper.SetColorWindow(255.0)
+        mapper.SetColorLevel(127.5)
+        self._actor = vtkActor2D()
+        self._actor.SetMapper(mapper)
+        self._actor.SetPosition(0, 0)
+        self._overlay = vtkRenderer()
+        self._overlay.SetInteractive(False)  # picking and interaction go to the subplot below
+        self._overlay.AddViewProp(self._actor)
+        self._window: Any = None
+        self._observer: int | None = None
+        self._layer: int | None = None
+
+    # ------------------------------------------------------------------ lifecycle
+    def attach(self) -> None:
+        """Add the overlay renderer on a new top layer and start observing frames."""
+        window = self._plotter.render_window
+        if window is None:
+            raise InputError("plotter: the plotter is closed; there is no window to enhance")
+        self._window = window
+        n = window.GetNumberOfLayers()
+        window.SetNumberOfLayers(n + 1)
+        self._layer = n
+        self._overlay.SetLayer(n)  # layers > 0 keep the colour buffer: we draw over it
+        self._overlay.SetViewport(self._renderer.GetViewport())
+        window.AddRenderer(self._overlay)
+        self._observer = window.AddObserver("StartEvent", self._on_start)
+
+    def detach(self) -> None:
+        """Remove everything :meth:`attach` added; the window renders exactly as before."""
+        window, self._window = self._window, None
+        if window is None:
+            return
+        if self._observer is not None:
+            window.RemoveObserver(self._observer)
+            self._observer = None
+        window.RemoveRenderer(self._overlay)
+        # Give back every layer above the highest one still in use (ours, and those of overlays
+        # of other subplots removed before us), never one another renderer still uses.
+        renderers = window.GetRenderers()
+        used = [
+            renderers.GetItemAsObject(k).GetLayer() for k in range(renderers.GetNumberOfItems())
+        ]
+        needed = max(used, default=0) + 1
+        if self._layer is not None and needed <= self._layer < window.GetNumberOfLayers():
+            window.SetNumberOfLayers(needed)
+        self._layer = None
+        self._key = None
+
+    # ------------------------------------------------------------------ per frame
+    def _view_key(self) -> tuple:
+        """Everything the overlay depends on; a new frame with the same key reuses it."""
+        ren = self._renderer
+        cam = ren.GetActiveCamera()
+        cam_key = (
+            cam.GetPosition(),
+            cam.GetFocalPoint(),
+            cam.GetViewUp(),
+            cam.GetViewAngle(),
+            cam.GetParallelProjection(),
+            cam.GetParallelScale(),
+            cam.GetWindowCenter(),
+            cam.GetUseHorizontalViewAngle(),
+        )
+        props = []
+        for name, actor in ren.actors.items():
+            mapper = actor.GetMapper() if hasattr(actor, "GetMapper") else None
+            data = mapper.GetInputDataObject(0, 0) if mapper is not None else None
+            # VTK addresses, not id(): the Python wrappers may be new objects on each access
+            props.append(
+                (
+                    name,
+                    actor.__this__,
+                    actor.GetVisibility(),
+                    actor.GetMTime(),
+                    data.__this__ if data is not None else None,
+                    data.GetMTime() if data is not None else 0,
+                )
+            )
+        return (
+            cam_key,
+            tuple(ren.GetSize()),
+            tuple(ren.GetViewport()),
+            tuple(props),
+        )
+
+    def _on_start(self, _obj: object, _event: str) -> None:
+        if self._busy:  # our own capture never renders this window, but never loop anyway
+            return
+        key = self._view_key()
+        if key == self._key:
+            return
+        self._busy = True
+        try:
+            self.update()
+            self._key = key
+        except Exception as exc:  # an observer must not raise into VTK: warn, show nothing
+            self._set_pixels(np.zeros((1, 1, 4), np.uint8))
+            self._key = key
+            warnings.warn(f"sciviz_gbuf live edges: overlay disabled for this frame: {exc}",
+                          RuntimeWarning, stacklevel=2)  # fmt: skip
+        finally:
+            self._busy = False
+
+    def capture(self) -> GBuffer | None:
+        """G-buffer of the renderer's scene with its camera at its pixel size (None: empty)."""
+        ren = self._renderer
+        w, h = (int(v) for v in ren.GetSize())
+        if w < 1 or h < 1:
+            return None
+        renderers = self._plotter.renderers
+        old = renderers.active_index
+        # capture(plotter) reads the active renderer's actors: point it at ours meanwhile
+        _activate(renderers, next(i for i, r in enumerate(renderers) if r is ren))
+        try:
+            return capture(
+                self._plotter,
+                window_size=(w, h),
+                camera=ren.GetActiveCamera(),
+                supersample=self.params.supersample,
+            )
+        except InputError as exc:
+            if "no visible actor" in str(exc):
+                return None  # an empty subplot has no edges
+            raise
+        finally:
+            _activate(renderers, old)
+
+    def update(self) -> None:
+        """Capture now and upload a new overlay (called by the frame observer)."""
+        self._overlay.SetViewport(self._renderer.GetViewport())
+        gb = self.capture()
+        self.updates += 1
+        self.last_gbuffer = gb
+        if gb is None:
+            self._set_pixels(np.zeros((1, 1, 4), np.uint8))
+            return
+        rgba = overlay_rgba(gb, self.params)
+        self._set_pixels(np.round(rgba * 255.0).astype(np.uint8))
+
+    def _set_pixels(self, rgba: np.ndarray) -> None:
+        h, w = rgba.shape[:2]
+        self._image.SetDimensions(w, h, 1)
+        # VTK images start at the bottom row
+        flat = np.ascontiguousarray(rgba[::-1].reshape(h * w, 4))
+        arr = numpy_to_vtk(flat, deep=True)
+        arr.SetName("edges")
+        self._image.GetPointData().SetScalars(arr)
+        self._image.Modified()

@@ -1,0 +1,473 @@
+"""PyVista integration: ``mesh.gbuf`` (dataset accessor) and ``plotter.gbuf`` (plotter component).
+
+Registered through PyVista's own extension points (PyVista >= 0.48):
+:func:`pyvista.register_dataset_accessor` and :func:`pyvista.register_plotter_component`. The
+package declares the entry points ``gbuf = "sciviz_gbuf.pyvista_plugin"`` in the groups
+``pyvista.accessors`` and ``pyvista.plotter_components``, so with the package installed
+``pv.Sphere().gbuf`` works without importing :mod:`sciviz_gbuf`: PyVista imports this module on
+the first ``.gbuf`` lookup. Importing this module registers both (idempotently).
+
+Datasets::
+
+    img = mesh.gbuf.capture(window_size=(800, 600))     # pyvista.ImageData, one point a pixel
+    gb = img.gbuf.gbuffer()                              # the GBuffer back (lossless)
+    pic = mesh.gbuf.edges(style="enhance")               # ImageData with an "RGB" point array
+    topo = dem_grid.gbuf.topographic_map(interval=20)   # ImageData with "RGBA" on the grid
+
+Plotters::
+
+    pl.gbuf.capture()                                    # G-buffer of the active subplot
+    pl.gbuf.enable_edge_enhancement(style="enhance")     # live overlay on the active subplot
+    pl.gbuf.edge_enhancement_enabled                     # True
+    pl.gbuf.disable_edge_enhancement()
+
+All arguments are keyword-only; bad values raise :class:`sciviz_gbuf.errors.InputError`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+import pyvista as pv
+
+from . import _live
+from .capture import capture as _capture
+from .errors import InputError
+from .gbuffer import GBuffer
+from .readers.dem import read_dem
+from .recipes.illustration import STYLES, illustrate
+from .recipes.terrain import topographic_map as _topographic_map
+
+__all__ = ["ACCESSOR_NAME", "GBufAccessor", "GBufPlotterComponent", "register"]
+
+#: Name of the accessor and of the plotter component.
+ACCESSOR_NAME = "gbuf"
+# Field-data key GBuffer.to_pyvista stores its metadata under (marks a G-buffer image).
+_META_KEY = "sciviz_gbuf_meta"
+
+
+def _image_from_rgb(rgb: np.ndarray, name: str) -> pv.ImageData:
+    """(H, W, k) float in [0, 1] or uint8, row 0 on top -> ImageData with uint8 point array."""
+    a = np.asarray(rgb)
+    if a.dtype != np.uint8:
+        a = np.round(np.clip(np.nan_to_num(a, nan=1.0), 0.0, 1.0) * 255.0).astype(np.uint8)
+    h, w = a.shape[:2]
+    img = pv.ImageData(dimensions=(w, h, 1))
+    # VTK images start at the bottom row: pixel (i, j) is point (j, H-1-i), as in to_pyvista
+    img.point_data[name] = np.ascontiguousarray(a[::-1].reshape(h * w, a.shape[2]))
+    img.set_active_scalars(name)
+    return img
+
+
+def _is_gbuffer_image(ds: object) -> bool:
+    return isinstance(ds, pv.ImageData) and _META_KEY in ds.field_data
+
+
+class GBufAccessor:
+    """``dataset.gbuf``: G-buffers, edge pictures and topographic maps of a PyVista dataset.
+
+    Parameters
+    ----------
+    dataset : pyvista.DataSet
+        The dataset the accessor is attached to.
+    """
+
+    def __init__(self, dataset: Any) -> None:
+        self._dataset = dataset
+
+    def capture(
+        self,
+        *,
+        window_size: Sequence[int] | None = None,
+        camera: object = None,
+        parallel_projection: bool | None = None,
+        scalars: Sequence[str] | str = (),
+        supersample: int = 1,
+        feature_angle: float = 30.0,
+        progress_bar: bool = False,
+    ) -> pv.ImageData:
+        """Capture the dataset's G-buffer (:func:`sciviz_gbuf.capture`) as an ImageData.
+
+        Parameters
+        ----------
+        window_size, camera, parallel_projection, scalars, supersample, feature_angle
+            As in :func:`sciviz_gbuf.capture`.
+        progress_bar : bool, default: False
+            Show a progress bar.
+
+        Returns
+        -------
+        pyvista.ImageData
+            One point per buffer pixel (``GBuffer.to_pyvista``): every channel (``depth``,
+            ``sz``, ``normal``, ``world``, ``object_id``, ``cell_id``, ``mask``, ``uv``,
+            ``scalars:<name>``) is a point array, the camera and metadata are in field data.
+            ``image.gbuf.gbuffer()`` (or ``GBuffer.from_pyvista(image)``) gives the
+            :class:`~sciviz_gbuf.GBuffer` back, bit for bit.
+        """
+        gb = _capture(
+            self._dataset,
+            window_size=window_size,
+            camera=camera,
+            parallel_projection=parallel_projection,
+            scalars=scalars,
+            supersample=supersample,
+            feature_angle=feature_angle,
+            progress_bar=progress_bar,
+        )
+        return gb.to_pyvista()
+
+    def gbuffer(self) -> GBuffer:
+        """The :class:`~sciviz_gbuf.GBuffer` of an image made by :meth:`capture`.
+
+        Raises
+        ------
+        InputError
+            If the dataset is not such an image.
+        """
+        if not _is_gbuffer_image(self._dataset):
+            raise InputError(
+                "dataset: not a G-buffer image (expected the result of .gbuf.capture())"
+            )
+        return GBuffer.from_pyvista(self._dataset, source="dataset")
+
+    def edges(
+        self,
+        *,
+        style: str = "enhance",
+        operator: str = "diagonal",
+        crease_angle: float = 30.0,
+        depth_jump: float = 1.0,
+        width: float = 1.0,
+        window_size: Sequence[int] | None = None,
+        camera: object = None,
+        supersample: int = 1,
+        progress_bar: bool = False,
+    ) -> pv.ImageData:
+        """An edge-enhanced picture of the dataset (:func:`~sciviz_gbuf.recipes.illustrate`).
+
+        On an image made by :meth:`capture` the stored G-buffer is used (no new render;
+        ``window_size``, ``camera`` and ``supersample`` must then be left unset).
+
+        Parameters
+        ----------
+        style : {"enhance", "lines", "fig7", "edgemap"}, default: "enhance"
+            ``enhance``: shaded, white inner edges, black profiles (2003); ``lines``: black
+            profile and crease lines on white; ``fig7``: convex edges white, concave black (1990
+            Fig. 7); ``edgemap``: the RGBA edge map itself.
+        operator, crease_angle, depth_jump, width
+            As in :func:`sciviz_gbuf.filters.edge_map`.
+        window_size, camera, supersample
+            As in :func:`sciviz_gbuf.capture`.
+        progress_bar : bool, default: False
+            Show a progress bar while capturing.
+
+        Returns
+        -------
+        pyvista.ImageData
+            One point per output pixel with the uint8 point array ``"RGB"`` (``"RGBA"`` for
+            ``edgemap``: RGB inner edges, A profiles), active, so ``.plot(rgb=True)`` or
+            ``.save("x.png")`` work directly.
+        """
+        if style not in STYLES:
+            raise InputError(f"style: expected one of {sorted(STYLES)}, got {style!r}")
+        if _is_gbuffer_image(self._dataset):
+            if window_size is not None or camera is not None or supersample != 1:
+                raise InputError(
+                    "window_size/camera/supersample: this is a captured G-buffer image; "
+                    "its view is fixed"
+                )
+            gb = self.gbuffer()
+        else:
+            gb = _capture(
+                self._dataset,
+                window_size=window_size,
+                camera=camera,
+                supersample=supersample,
+                progress_bar=progress_bar,
+            )
+        picture = illustrate(
+            gb,
+            style=style,
+            operator=operator,
+            crease_angle=crease_angle,
+            depth_jump=depth_jump,
+            width=width,
+        )
+        return _image_from_rgb(picture, "RGBA" if picture.shape[-1] == 4 else "RGB")
+
+    def topographic_map(self, *, heights: str | None = None, **kwargs: Any) -> pv.ImageData:
+        """A plan-view topographic map of a height grid (:func:`sciviz_gbuf.topographic_map`).
+
+        Parameters
+        ----------
+        heights : str, optional
+            Point array holding the heights. Default: ``"elevation"`` if present (the array of
+            ``DEM.to_pyvista()``), else the active point scalars; a StructuredGrid without
+            either uses its points' z.
+        **kwargs
+            Keyword arguments of :func:`sciviz_gbuf.topographic_map` (``interval``,
+            ``major_interval``, ``bands``, ``relief``, ``progress_bar``, ...).
+
+        Returns
+        -------
+        pyvista.ImageData
+            On the grid: the same dimensions, origin and spacing (x, y), with the uint8 point
+            array ``"RGBA"`` (active; nodata transparent).
+
+        Raises
+        ------
+        InputError
+            If the dataset is not a 2-D ImageData or an axis-aligned regular StructuredGrid
+            in the x/y plane, or for a bad map parameter.
+        """
+        z, origin, spacing = _grid_heights(self._dataset, heights)
+        dem = read_dem(z[::-1], spacing=spacing, geographic=False)  # row 0 north
+        rgba = _topographic_map(dem, **kwargs)
+        img = _image_from_rgb(rgba, "RGBA")
+        img.origin = origin
+        img.spacing = (spacing[0], spacing[1], 1.0)
+        return img
+
+
+def _grid_heights(
+    ds: Any, name: str | None
+) -> tuple[np.ndarray, tuple[float, float, float], tuple[float, float]]:
+    """Heights (ny, nx) with row 0 south, the grid origin and (dx, dy) of a 2-D height grid."""
+    if isinstance(ds, pv.ImageData):
+        nx, ny, nz = ds.dimensions
+        if nz != 1 or nx < 2 or ny < 2:
+            raise InputError(
+                f"dataset: expected a 2-D ImageData in the x/y plane (dimensions (nx, ny, 1)), "
+                f"got dimensions {ds.dimensions}"
+            )
+        if not np.allclose(np.asarray(ds.direction_matrix), np.eye(3)):
+            raise InputError("dataset: a rotated ImageData (direction matrix) is not supported")
+        values = _height_array(ds, name, allow_z=False)
+        dx, dy, _ = ds.spacing
+        return values.reshape(ny, nx), tuple(ds.origin), (float(dx), float(dy))
+    if isinstance(ds, pv.StructuredGrid):
+        nx, ny, nz = ds.dimensions
+        if nz != 1 or nx < 2 or ny < 2:
+            raise InputError(
+                f"dataset: expected a StructuredGrid of dimensions (nx, ny, 1), got {ds.dimensions}"
+            )
+        pts = np.asarray(ds.points, dtype=np.float64).reshape(ny, nx, 3)
+        x, y = pts[..., 0], pts[..., 1]
+        dx, dy = x[0, 1] - x[0, 0], y[1, 0] - y[0, 0]
+        tol = 1e-6 * max(abs(dx), abs(dy))
+        regular = (
+            dx > 0
+            and dy > 0
+            and np.allclose(x, x[0, 0] + dx * np.arange(nx)[None, :], rtol=0, atol=tol * nx)
+            and np.allclose(y, y[0, 0] + dy * np.arange(ny)[:, None], rtol=0, atol=tol * ny)
+        )
+        if not regular:
+            raise InputError(
+                "dataset: the StructuredGrid is not a regular x/y grid (x increasing along i, "
+                "y along j, evenly spaced), as DEM.to_pyvista() makes"
+            )
+        if name is None and "elevation" not in ds.point_data and ds.active_scalars is None:
+            values = pts[..., 2].ravel()
+        else:
+            values = _height_array(ds, name, allow_z=True)
+        origin = (float(x[0, 0]), float(y[0, 0]), 0.0)
+        return np.asarray(values, np.float64).reshape(ny, nx), origin, (float(dx), float(dy))
+    raise InputError(
+        f"dataset: topographic_map needs a 2-D ImageData or StructuredGrid of heights, "
+        f"got {type(ds).__name__}"
+    )
+
+
+def _height_array(ds: Any, name: str | None, *, allow_z: bool) -> np.ndarray:
+    if name is None:
+        if "elevation" in ds.point_data:
+            name = "elevation"
+        elif ds.active_scalars_name is not None and ds.active_scalars_info.association.name == (
+            "POINT"
+        ):
+            name = ds.active_scalars_name
+        else:
+            hint = ", or points' z" if allow_z else ""
+            raise InputError(
+                f"heights: no point array named 'elevation' and no active point scalars{hint}; "
+                f"pass heights=<name> (point arrays: {list(ds.point_data.keys())})"
+            )
+    if name not in ds.point_data:
+        raise InputError(
+            f"heights: no point array {name!r}; point arrays: {list(ds.point_data.keys())}"
+        )
+    a = np.asarray(ds.point_data[name], dtype=np.float64)
+    if a.ndim != 1:
+        raise InputError(f"heights: {name!r} has {a.shape[1]} components; expected one")
+    return a
+
+
+class GBufPlotterComponent:
+    """``plotter.gbuf``: G-buffer capture and live edge enhancement of a PyVista plotter.
+
+    Parameters
+    ----------
+    plotter : pyvista.BasePlotter
+        The plotter the component is attached to.
+    """
+
+    def __init__(self, plotter: Any) -> None:
+        self._plotter = plotter
+        # one live overlay per enhanced renderer (subplot), keyed by the renderer's id
+        self._live: dict[int, _live.LiveEdges] = {}
+
+    def capture(self, **kwargs: Any) -> pv.ImageData:
+        """G-buffer of the active subplot (its visible actors and camera) as an ImageData.
+
+        Parameters
+        ----------
+        **kwargs
+            Keyword arguments of :func:`sciviz_gbuf.capture` (``window_size``, ``camera``,
+            ``scalars``, ``supersample``, ``progress_bar``, ...).
+
+        Returns
+        -------
+        pyvista.ImageData
+            As :meth:`GBufAccessor.capture`.
+        """
+        return _capture(self._plotter, **kwargs).to_pyvista()
+
+    def enable_edge_enhancement(
+        self,
+        *,
+        style: str = "enhance",
+        operator: str = "diagonal",
+        crease_angle: float = 30.0,
+        depth_jump: float = 1.0,
+        width: float = 1.0,
+        supersample: int = 1,
+        inner_color: Sequence[float] = (1.0, 1.0, 1.0),
+        profile_color: Sequence[float] = (0.0, 0.0, 0.0),
+        opacity: float = 1.0,
+    ) -> Any:
+        """Draw the edge map over every frame of the active subplot, updated as the view moves.
+
+        Before a frame is drawn, if the camera, the window size or any actor or its data changed
+        since the previous frame, the subplot is captured offscreen (a separate render) and its
+        edge map composited over the normal rendering of that subplot only. Calling it again
+        replaces the parameters.
+
+        Parameters
+        ----------
+        style : {"enhance", "profile", "lines", "fig7"}, default: "enhance"
+            ``enhance``: inner edges in ``inner_color``, profiles in ``profile_color`` (2003);
+            ``profile``: profiles only; ``lines``: profile and crease lines in
+            ``profile_color``; ``fig7``: convex edges ``inner_color``, concave edges and
+            profiles ``profile_color`` (1990 Fig. 7).
+        operator : {"diagonal", "c1"}, default: "diagonal"
+        crease_angle, depth_jump, width
+            As in :func:`sciviz_gbuf.filters.edge_map` (degrees, pixel footprints, pixels).
+        supersample : int in [1, 4], default: 1
+            Capture at k times the subplot size: antialiased lines, k² the cost.
+        inner_color, profile_color : RGB floats in [0, 1]
+            Default white and black.
+        opacity : float in [0, 1], default: 1
+            Scales the edge ink.
+
+        Returns
+        -------
+        pyvista.Plotter
+            The plotter, so calls chain.
+        """
+        params = _live.EdgeParams.checked(
+            style=style,
+            operator=operator,
+            crease_angle=crease_angle,
+            depth_jump=depth_jump,
+            width=width,
+            supersample=supersample,
+            inner_color=inner_color,
+            profile_color=profile_color,
+            opacity=opacity,
+        )
+        renderer = self._plotter.renderer
+        self.disable_edge_enhancement()
+        live = _live.LiveEdges(self._plotter, renderer, params)
+        live.attach()
+        self._live[id(renderer)] = live
+        self._rerender()
+        return self._plotter
+
+    def _rerender(self) -> None:
+        """Render once more if the plotter already rendered a frame.
+
+        Off-screen, ``screenshot()`` reads the last frame without rendering again; without this
+        the first screenshot after enabling/disabling would show the previous state.
+        """
+        pl = self._plotter
+        if pl.render_window is not None and not getattr(pl, "_first_time", True):
+            pl.render()
+
+    def disable_edge_enhancement(self, *, all_subplots: bool = False) -> Any:
+        """Remove the live edge overlay of the active subplot (or of all subplots).
+
+        Every renderer, layer and observer the overlay added is removed: the next frame is
+        bit for bit the plain rendering.
+
+        Returns
+        -------
+        pyvista.Plotter
+            The plotter, so calls chain.
+        """
+        keys = list(self._live) if all_subplots else [id(self._plotter.renderer)]
+        removed = False
+        # newest first, so each one gives its layer back (layers are a stack)
+        for key in reversed(keys):
+            live = self._live.pop(key, None)
+            if live is not None:
+                live.detach()
+                removed = True
+        if removed:
+            self._rerender()
+        return self._plotter
+
+    @property
+    def edge_enhancement_enabled(self) -> bool:
+        """Whether the active subplot has the live edge overlay."""
+        return id(self._plotter.renderer) in self._live
+
+    @property
+    def live(self) -> _live.LiveEdges | None:
+        """The live overlay of the active subplot (its ``updates`` count, last G-buffer)."""
+        return self._live.get(id(self._plotter.renderer))
+
+    def _drop_all(self) -> None:
+        # closing: no re-render, the window is going away
+        for key in reversed(list(self._live)):
+            self._live.pop(key).detach()
+
+    def __plotter_close__(self) -> None:
+        """PyVista lifecycle hook: drop every overlay and observer when the plotter closes."""
+        self._drop_all()
+
+    def __plotter_deep_clean__(self) -> None:
+        """PyVista lifecycle hook (``deep_clean``): as on close."""
+        self._drop_all()
+
+
+def register() -> None:
+    """Register ``gbuf`` on every PyVista dataset and plotter (idempotent).
+
+    Raises
+    ------
+    RuntimeError
+        If PyVista is older than 0.48 (no extension points) or ``gbuf`` would shadow one of
+        PyVista's own attributes (PyVista's ValueError is passed on).
+    """
+    if not hasattr(pv, "register_dataset_accessor"):
+        raise RuntimeError("sciviz_gbuf's PyVista plugin needs pyvista >= 0.48")
+    # re-registering the same class is a no-op for accessors, but warns for components
+    pv.register_dataset_accessor(ACCESSOR_NAME, pv.DataSet)(GBufAccessor)
+    current = pv.BasePlotter.__dict__.get(ACCESSOR_NAME)
+    if getattr(current, "_component_cls", None) is not GBufPlotterComponent:
+        pv.register_plotter_component(ACCESSOR_NAME, pv.BasePlotter)(GBufPlotterComponent)
+
+
+register()

@@ -1,0 +1,927 @@
+"""VTK pipeline algorithms: :func:`~sciviz_gbuf.capture` and the filters as VTK filters.
+
+Each class is a :class:`~vtkmodules.util.vtkAlgorithm.VTKPythonAlgorithmBase` subclass, so it
+chains with ``SetInputConnection`` and with plain VTK image filters, and VTK's demand-driven
+pipeline re-executes it only when it, or something upstream of it, was modified.
+
+- :class:`vtkGBufferCapture` (source, no input): a scene -> ``vtkImageData`` holding every
+  G-buffer channel as a named point array, exactly :meth:`GBuffer.to_pyvista` (row 0 of the
+  G-buffer is the top row, i.e. the *last* VTK row; the camera metadata travels in field data).
+- Array filters (``vtkImageData`` -> ``vtkImageData``): the input's named point array, as an
+  ``(H, W)`` or ``(H, W, k)`` image in G-buffer row order, goes through the numpy function;
+  the output is a shallow copy of the input plus the result as a new named point array,
+  which becomes the active scalars (what plain VTK image filters process).
+  :data:`ARRAY_FILTERS` lists them.
+- G-buffer filters (``vtkImageData`` -> ``vtkImageData``): the input must carry a whole
+  G-buffer (the output of :class:`vtkGBufferCapture`, or of array filters after it, which keep
+  it); it is rebuilt with :meth:`GBuffer.from_pyvista` and the function applied.
+  :data:`GBUFFER_FILTERS` lists them. Their results are at the G-buffer's *output* size: for
+  ``supersample == 1`` the output is the input plus the new array, for ``supersample > 1`` it
+  is a new, smaller image holding only the new array (the full-size channels do not fit it).
+
+Every keyword parameter of the wrapped function has a ``Set<Name>``/``Get<Name>`` pair
+(``width`` -> ``SetWidth``, ``crease_angle`` -> ``SetCreaseAngle``), plus the generic
+``SetParameter(name, value)`` / ``GetParameter(name)``. A setter calls ``Modified()`` only when
+the value changes, and validates first: the function is run on a tiny synthetic input with the
+new value, so a bad value raises :class:`~sciviz_gbuf.errors.InputError` from the setter and
+leaves the algorithm unchanged.
+
+Errors while the pipeline executes (say an input array that does not exist) cannot propagate
+through VTK's C++ executive as Python exceptions. They are caught in ``RequestData``, the output
+is emptied (never stale), VTK reports the failed request on its output window, the exception is
+kept in ``last_error`` and it is raised again by ``Update()`` of any algorithm of this module
+at or downstream of the failing one (even through plain VTK filters in between). When a plain
+VTK algorithm is updated instead, call :func:`raise_pipeline_errors` on it.
+
+``execution_count`` counts ``RequestData`` calls (for checking laziness).
+
+The classes (:data:`ALGORITHMS` maps the function names to them):
+
+=============================  ======================================  =====================
+class                          wraps                                   default input array
+=============================  ======================================  =====================
+``vtkGBufferCapture``          :func:`sciviz_gbuf.capture`             (source)
+``vtkGBufferSobelGradient``    :func:`~sciviz_gbuf.filters.sobel_gradient`    ``sz``
+``vtkGBufferSecondOrder``      :func:`~sciviz_gbuf.filters.second_order`      ``sz``
+``vtkGBufferC1Discontinuity``  :func:`~sciviz_gbuf.filters.c1_discontinuity`  ``sz``
+``vtkGBufferContourLines``     :func:`~sciviz_gbuf.filters.contour_lines`     ``depth``
+``vtkGBufferHatching``         :func:`~sciviz_gbuf.filters.hatching`          ``depth``
+``vtkGBufferHillshade``        :func:`~sciviz_gbuf.filters.hillshade`         active scalars
+``vtkGBufferColorBands``       :func:`~sciviz_gbuf.filters.color_bands`       active scalars
+``vtkGBufferLambert``          :func:`~sciviz_gbuf.filters.lambert`           ``normal``
+``vtkGBufferProfileEdges``     :func:`~sciviz_gbuf.filters.profile_edges`     G-buffer
+``vtkGBufferInternalEdges``    :func:`~sciviz_gbuf.filters.internal_edges`    G-buffer
+``vtkGBufferCreaseEdges``      :func:`~sciviz_gbuf.filters.crease_edges`      G-buffer
+``vtkGBufferIdEdges``          :func:`~sciviz_gbuf.filters.id_edges`          G-buffer
+``vtkGBufferEdgeMap``          :func:`~sciviz_gbuf.filters.edge_map`          G-buffer
+``vtkGBufferReflectionLines``  :func:`~sciviz_gbuf.filters.reflection_lines`  G-buffer
+``vtkGBufferIsophotes``        :func:`~sciviz_gbuf.filters.isophotes`         G-buffer
+=============================  ======================================  =====================
+
+The result array is named after the function (``SetOutputArrayName`` to change it). Array
+filters pass the input's ``"mask"`` array (the G-buffer coverage) as ``mask=`` when there is
+one (``SetMaskArrayName(None)`` to stop that); ``SetInputComponent(i)`` takes one component of
+a vector array, e.g. ``SetInputArrayName("world")`` + ``SetInputComponent(2)`` for heights.
+
+Image extents are announced before execution (``RequestInformation``), as VTK image filters
+downstream need: the capture's from its window size and supersampling, a G-buffer filter's
+output size from the supersampling found upstream (through this module's algorithms, plain VTK
+filters assumed to keep the size, or data given with ``SetInputData``). If it cannot be found
+and the G-buffer turns out supersampled, the G-buffer filter fails with :class:`InputError`
+rather than hand VTK an image of another size than announced.
+
+As with any VTK algorithm, an output port does not keep its algorithm alive: keep a Python
+reference to each algorithm (``b.SetInputConnection(A().GetOutputPort())`` crashes).
+
+The algorithms do not watch the scene given to :meth:`vtkGBufferCapture.SetScene`: after
+editing the datasets, actors or camera in it, call ``Modified()`` on the capture.
+
+Examples
+--------
+>>> import pyvista as pv
+>>> from sciviz_gbuf.vtk_algorithms import vtkGBufferCapture, vtkGBufferEdgeMap
+>>> cap = vtkGBufferCapture()
+>>> cap.SetScene(pv.Sphere())
+>>> cap.SetWindowSize(64, 48)
+>>> edges = vtkGBufferEdgeMap()
+>>> edges.SetInputConnection(cap.GetOutputPort())
+>>> edges.SetWidth(2)
+>>> edges.Update()
+True
+>>> pv.wrap(edges.GetOutput()).point_data["edge_map"].shape
+(3072, 4)
+"""
+
+from __future__ import annotations
+
+import inspect
+import json
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+import pyvista as pv
+from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
+from vtkmodules.util.vtkAlgorithm import VTKPythonAlgorithmBase
+from vtkmodules.vtkCommonDataModel import vtkDataSet, vtkImageData, vtkMultiBlockDataSet
+from vtkmodules.vtkCommonExecutionModel import vtkAlgorithm, vtkStreamingDemandDrivenPipeline
+from vtkmodules.vtkRenderingCore import vtkCamera, vtkRenderer
+
+from . import filters as F
+from .camera import VIEWS, CameraInfo
+from .capture import (
+    DEFAULT_WINDOW_SIZE,
+    _check_scalars,
+    _check_window_size,
+    _resolve_camera,
+    capture,
+)
+from .errors import InputError
+from .gbuffer import _META, GBuffer
+from .scene import _is_plotter, scene_items
+
+__all__ = [
+    "ALGORITHMS",
+    "ARRAY_FILTERS",
+    "GBUFFER_FILTERS",
+    "raise_pipeline_errors",
+    "vtkGBufferC1Discontinuity",
+    "vtkGBufferCapture",
+    "vtkGBufferColorBands",
+    "vtkGBufferContourLines",
+    "vtkGBufferCreaseEdges",
+    "vtkGBufferEdgeMap",
+    "vtkGBufferHatching",
+    "vtkGBufferHillshade",
+    "vtkGBufferIdEdges",
+    "vtkGBufferInternalEdges",
+    "vtkGBufferIsophotes",
+    "vtkGBufferLambert",
+    "vtkGBufferProfileEdges",
+    "vtkGBufferReflectionLines",
+    "vtkGBufferSecondOrder",
+    "vtkGBufferSobelGradient",
+]
+
+_SDDP = vtkStreamingDemandDrivenPipeline
+
+
+# ---------------------------------------------------------------------------- helpers
+def _freeze(value: Any) -> Any:
+    """A hashable, comparable form of a parameter value (sequences and arrays -> tuples)."""
+    if isinstance(value, np.ndarray):
+        return _freeze(value.tolist())
+    if isinstance(value, (list, tuple)):
+        return tuple(_freeze(v) for v in value)
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def _same(a: Any, b: Any) -> bool:
+    # NaN != NaN would make "set to the current value" look like a change: compare the frozen
+    # forms, treating identical NaN positions as equal
+    fa, fb = _freeze(a), _freeze(b)
+    if fa is None or fb is None:  # np.asarray(None, float) is NaN: keep None distinct
+        return fa is fb
+    try:
+        return bool(fa == fb) or (
+            np.asarray(fa, dtype=float).shape == np.asarray(fb, dtype=float).shape
+            and bool(np.array_equal(np.asarray(fa, float), np.asarray(fb, float), equal_nan=True))
+        )
+    except (TypeError, ValueError):
+        return False
+
+
+def _camel(name: str) -> str:
+    return "".join(part[:1].upper() + part[1:] for part in name.split("_"))
+
+
+def _image_of(data: object, what: str) -> vtkImageData:
+    if not isinstance(data, vtkImageData):
+        raise InputError(f"{what}: expected a vtkImageData input, got {type(data).__name__}")
+    dims = data.GetDimensions()
+    if dims[2] != 1:
+        raise InputError(f"{what}: expected a 2-D image (one slice), got dimensions {dims}")
+    return data
+
+
+def _read_array(image: vtkImageData, name: str | None, what: str) -> tuple[np.ndarray, str]:
+    """Point array ``name`` (None: the active scalars) as (H, W[, k]), row 0 on top."""
+    pd = image.GetPointData()
+    arr = pd.GetArray(name) if name is not None else pd.GetScalars()
+    if arr is None:
+        have = [pd.GetArrayName(i) for i in range(pd.GetNumberOfArrays())]
+        wanted = repr(name) if name is not None else "active scalars"
+        raise InputError(f"{what}: the input has no point array {wanted}; it has {have}")
+    w, h, _ = image.GetDimensions()
+    a = vtk_to_numpy(arr)
+    # VTK stores x fastest from the bottom row up; G-buffer images have row 0 on top
+    return a.reshape(h, w, *a.shape[1:])[::-1], arr.GetName() or ""
+
+
+def _write_array(image: vtkImageData, name: str, values: np.ndarray) -> None:
+    """Add ``values`` (H, W[, k]), row 0 on top, as point array ``name`` of ``image``."""
+    a = np.asarray(values)
+    if a.dtype == np.bool_:
+        a = a.astype(np.uint8)
+    w, h, _ = image.GetDimensions()
+    if a.shape[:2] != (h, w):
+        raise InputError(f"{name}: result has shape {a.shape[:2]}, the image is {(h, w)}")
+    flat = np.ascontiguousarray(a[::-1].reshape(h * w, *a.shape[2:]))
+    vtk_arr = numpy_to_vtk(flat, deep=1)
+    vtk_arr.SetName(name)
+    # active scalars: plain VTK image filters (vtkImageShiftScale, ...) process those
+    image.GetPointData().SetScalars(vtk_arr)
+
+
+def _upstream(alg: vtkAlgorithm) -> list[vtkAlgorithm]:
+    out = []
+    for port in range(alg.GetNumberOfInputPorts()):
+        for c in range(alg.GetNumberOfInputConnections(port)):
+            up = alg.GetInputAlgorithm(port, c)
+            if up is not None:
+                out.append(up)
+    return out
+
+
+def raise_pipeline_errors(alg: vtkAlgorithm) -> None:
+    """Raise the error of the most upstream algorithm of this module that failed, if any.
+
+    Walks ``alg`` and everything upstream of it (through plain VTK algorithms too). Use after
+    ``Update()`` of a plain VTK algorithm fed by this module's algorithms; their own
+    ``Update()`` does it already.
+    """
+    seen: set[int] = set()
+
+    def walk(a: vtkAlgorithm) -> None:
+        key = id(a)  # the wrapper of a live algorithm is unique, so id() identifies it
+        if key in seen:
+            return
+        seen.add(key)
+        for up in _upstream(a):
+            walk(up)
+        err = getattr(a, "last_error", None)
+        if err is not None:
+            raise err
+
+    walk(alg)
+
+
+def _meta_supersample(data: object) -> int | None:
+    """``supersample`` recorded in a G-buffer image's field data, or None."""
+    if not isinstance(data, vtkImageData):
+        return None
+    arr = data.GetFieldData().GetAbstractArray(_META)
+    if arr is None or arr.GetNumberOfValues() == 0:
+        return None
+    try:
+        return int(json.loads(arr.GetValue(0)).get("supersample", 1))
+    except (ValueError, TypeError, AttributeError):
+        return None
+
+
+def _upstream_supersample(alg: vtkAlgorithm) -> int | None:
+    """Supersampling of the G-buffer flowing into ``alg``, known before anything executes.
+
+    Follows the first input upstream, through plain VTK filters (assumed to keep the image
+    size), to an algorithm of this module (which knows its output) or to data given with
+    ``SetInputData`` (whose field data tells); None when it cannot be known.
+    """
+    a = alg
+    for _ in range(1000):  # a pipeline is a DAG; the bound only guards against surprises
+        if a.GetNumberOfInputPorts() == 0 or a.GetNumberOfInputConnections(0) == 0:
+            return None
+        up = a.GetInputAlgorithm(0, 0)
+        if isinstance(up, _GBufferAlgorithm):
+            return up._supersample_hint()
+        if up is None:
+            return None
+        if up.IsA("vtkTrivialProducer"):
+            return _meta_supersample(up.GetOutputDataObject(0))
+        a = up
+    return None
+
+
+# ---------------------------------------------------------------------------- base
+class _GBufferAlgorithm(VTKPythonAlgorithmBase):
+    """Execution counting, error capture and error re-raising shared by all algorithms."""
+
+    def __init__(self, n_inputs: int) -> None:
+        VTKPythonAlgorithmBase.__init__(
+            self,
+            nInputPorts=n_inputs,
+            inputType="vtkImageData",
+            nOutputPorts=1,
+            outputType="vtkImageData",
+        )
+        self.execution_count = 0
+        self.last_error: Exception | None = None
+
+    def Update(self, *args: Any) -> Any:
+        """``vtkAlgorithm.Update``, then raise any error of this or an upstream execution."""
+        result = VTKPythonAlgorithmBase.Update(self, *args)
+        raise_pipeline_errors(self)
+        return result
+
+    def GetOutput(self, port: int = 0) -> vtkImageData:
+        """The output image (like ``vtkImageAlgorithm.GetOutput``)."""
+        return self.GetOutputDataObject(port)
+
+    def SetInputData(self, *args: Any) -> None:
+        """``SetInputData([port,] image)`` as on ``vtkImageAlgorithm`` (no upstream algorithm)."""
+        self.SetInputDataObject(*args)
+
+    def _supersample_hint(self) -> int | None:
+        """Supersampling of the G-buffer this algorithm outputs, if known before executing."""
+        return None
+
+    def RequestData(self, request, inInfo, outInfo):
+        self.execution_count += 1
+        output = vtkImageData.GetData(outInfo, 0)
+        try:
+            self._execute(inInfo, output, outInfo.GetInformationObject(0))
+        except Exception as exc:
+            # a Python exception cannot cross VTK's C++ executive: keep it for Update() and
+            # leave an empty output rather than the previous (stale) one
+            self.last_error = exc
+            output.Initialize()
+            return 0
+        self.last_error = None
+        return 1
+
+    def _execute(self, inInfo: Any, output: vtkImageData, out_info: Any) -> None:
+        raise NotImplementedError
+
+
+# ---------------------------------------------------------------------------- capture
+def _renderer_scene(ren: vtkRenderer) -> list[pv.DataSet]:
+    """World-space copies of the datasets of a vtkRenderer's visible actors."""
+    out = []
+    actors = ren.GetActors()
+    actors.InitTraversal()
+    for _ in range(actors.GetNumberOfItems()):
+        actor = actors.GetNextActor()
+        if not actor.GetVisibility() or actor.GetMapper() is None:
+            continue
+        mapper = actor.GetMapper()
+        producer = mapper.GetInputAlgorithm()
+        if producer is not None:
+            # a mapper fed by a connection holds its producer's output, possibly out of date
+            producer.Update()
+        data = mapper.GetInputDataObject(0, 0)
+        if not isinstance(data, (vtkDataSet, vtkMultiBlockDataSet)):
+            continue
+        m = actor.GetMatrix()
+        mat = np.array([[m.GetElement(i, j) for j in range(4)] for i in range(4)])
+        ds = pv.wrap(data)
+        if isinstance(ds, pv.MultiBlock):
+            ds = ds.combine(merge_points=False)
+        out.append(ds if np.allclose(mat, np.eye(4)) else ds.transform(mat, inplace=False))
+    if not out:
+        raise InputError("scene: the vtkRenderer has no visible actor with a dataset to capture")
+    return out
+
+
+def _camera_key(camera: object) -> Any:
+    """What makes two camera arguments equal (vtkCameras by their state, not identity)."""
+    if isinstance(camera, vtkCamera):
+        return (
+            "vtkCamera",
+            tuple(camera.GetPosition()),
+            tuple(camera.GetFocalPoint()),
+            tuple(camera.GetViewUp()),
+            camera.GetViewAngle(),
+            bool(camera.GetParallelProjection()),
+            camera.GetParallelScale(),
+        )
+    if isinstance(camera, CameraInfo):
+        return ("CameraInfo", camera.to_json())
+    return _freeze(camera)
+
+
+class vtkGBufferCapture(_GBufferAlgorithm):
+    """:func:`sciviz_gbuf.capture` as a VTK source: scene -> G-buffer ``vtkImageData``.
+
+    The output is :meth:`GBuffer.to_pyvista` of the capture: one point per buffer pixel
+    (``supersample`` times the window size), the channels (``depth``, ``sz``, ``normal``,
+    ``world``, ``object_id``, ``cell_id``, ``mask`` as uint8, ``uv``, ``scalars:<name>``) as
+    point arrays, the camera and metadata in field data, so :meth:`GBuffer.from_pyvista`
+    (and the G-buffer filters of this module) rebuild the exact G-buffer.
+
+    Parameters are set with ``SetScene``, ``SetWindowSize``, ``SetSupersample``, ``SetCamera``,
+    ``SetCameraPosition``, ``SetParallelProjection``, ``SetScalars`` and ``SetFeatureAngle``
+    (the arguments of :func:`~sciviz_gbuf.capture`). Each validates its value (raising
+    :class:`InputError`) and calls ``Modified()`` only when the value changes.
+    """
+
+    def __init__(self) -> None:
+        super().__init__(0)
+        self._scene: object = None
+        self._window_size: tuple[int, int] | None = None
+        self._supersample = 1
+        self._camera: object = None
+        self._camera_key: Any = None
+        self._parallel: bool | None = None
+        self._scalars: tuple[str, ...] = ()
+        self._feature_angle = 30.0
+
+    # -- parameters
+    def SetScene(self, scene: object) -> None:
+        """A dataset, a sequence of them, a ``pyvista.Plotter`` or a ``vtkRenderer``.
+
+        Its visible actors and, unless a camera is set, its camera are used (for a
+        vtkRenderer: its active camera as it is, and its render window's size by default).
+        The scene is not watched: call ``Modified()`` after editing it.
+        """
+        if scene is self._scene:
+            return
+        if not isinstance(scene, vtkRenderer):
+            scene_items(scene)  # validates: raises InputError for an empty or bad scene
+        self._scene = scene
+        self.Modified()
+
+    def GetScene(self) -> object:
+        return self._scene
+
+    def SetWindowSize(self, width: int | Sequence[int], height: int | None = None) -> None:
+        """Output ``(width, height)``; ``None`` (the default): the scene's or 1024x768."""
+        if width is None:
+            size = None
+        else:
+            size = _check_window_size(width if height is None else (width, height))
+        if size != self._window_size:
+            self._window_size = size
+            self.Modified()
+
+    def GetWindowSize(self) -> tuple[int, int]:
+        """The window size that will be captured (resolved from the scene if not set)."""
+        if self._window_size is not None:
+            return self._window_size
+        if _is_plotter(self._scene):
+            return tuple(int(v) for v in self._scene.window_size)  # type: ignore[union-attr]
+        if isinstance(self._scene, vtkRenderer) and self._scene.GetRenderWindow() is not None:
+            w, h = self._scene.GetRenderWindow().GetSize()
+            if w > 0 and h > 0:
+                return int(w), int(h)
+        return DEFAULT_WINDOW_SIZE
+
+    def SetSupersample(self, k: int) -> None:
+        if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1:
+            raise InputError(f"supersample: expected a positive integer, got {k!r}")
+        if int(k) != self._supersample:
+            self._supersample = int(k)
+            self.Modified()
+
+    def GetSupersample(self) -> int:
+        return self._supersample
+
+    def SetCamera(self, camera: object) -> None:
+        """Anything :func:`capture` takes as ``camera`` (None: the scene's, else ``'iso'``).
+
+        A ``vtkCamera`` is copied now; changing it later has no effect until set again.
+        """
+        if isinstance(camera, str):
+            if camera not in VIEWS:
+                raise InputError(
+                    f"camera: unknown view {camera!r}; expected one of {sorted(VIEWS)}"
+                )
+        elif camera is not None:
+            _resolve_camera(camera, None, None)  # validates (raises InputError)
+        key = _camera_key(camera)
+        if (camera is None) == (self._camera is None) and _same(key, self._camera_key):
+            return
+        if isinstance(camera, vtkCamera):
+            copy = vtkCamera()
+            copy.DeepCopy(camera)
+            camera = copy
+        self._camera = camera
+        self._camera_key = key
+        self.Modified()
+
+    def SetCameraPosition(
+        self,
+        position: Sequence[float],
+        focal_point: Sequence[float],
+        view_up: Sequence[float],
+    ) -> None:
+        """Shorthand for ``SetCamera((position, focal_point, view_up))``."""
+        self.SetCamera(
+            tuple(tuple(float(v) for v in vec) for vec in (position, focal_point, view_up))
+        )
+
+    def GetCamera(self) -> object:
+        return self._camera
+
+    def SetParallelProjection(self, parallel: bool | None) -> None:
+        """Force orthographic (True) or perspective (False); None: as the camera is."""
+        if parallel is not None and not isinstance(parallel, (bool, np.bool_, int)):
+            raise InputError(f"parallel_projection: expected a bool or None, got {parallel!r}")
+        value = None if parallel is None else bool(parallel)
+        if value != self._parallel:
+            self._parallel = value
+            self.Modified()
+
+    def SetScalars(self, scalars: str | Sequence[str]) -> None:
+        names = _check_scalars(scalars)
+        if names != self._scalars:
+            self._scalars = names
+            self.Modified()
+
+    def SetFeatureAngle(self, angle: float) -> None:
+        try:
+            value = float(angle)
+        except (TypeError, ValueError):
+            value = float("nan")
+        if not (np.isfinite(value) and 0 <= value <= 180):
+            raise InputError(f"feature_angle: expected degrees in [0, 180], got {angle!r}")
+        if value != self._feature_angle:
+            self._feature_angle = value
+            self.Modified()
+
+    def _supersample_hint(self) -> int | None:
+        return self._supersample
+
+    # -- pipeline
+    def RequestInformation(self, request, inInfo, outInfo):
+        # downstream image filters need the extent before any data exists
+        w, h = self.GetWindowSize()
+        k = self._supersample
+        info = outInfo.GetInformationObject(0)
+        info.Set(_SDDP.WHOLE_EXTENT(), (0, w * k - 1, 0, h * k - 1, 0, 0), 6)
+        info.Set(vtkImageData.SPACING(), (1.0, 1.0, 1.0), 3)
+        info.Set(vtkImageData.ORIGIN(), (0.0, 0.0, 0.0), 3)
+        return 1
+
+    def _execute(self, inInfo: Any, output: vtkImageData, out_info: Any) -> None:
+        if self._scene is None:
+            raise InputError("vtkGBufferCapture: no scene; call SetScene() first")
+        scene = self._scene
+        camera = self._camera
+        if isinstance(scene, vtkRenderer):
+            if camera is None:
+                camera = scene.GetActiveCamera()
+            scene = _renderer_scene(scene)
+        gb = capture(
+            scene,
+            window_size=self.GetWindowSize(),
+            camera=camera,
+            parallel_projection=self._parallel,
+            scalars=self._scalars,
+            supersample=self._supersample,
+            feature_angle=self._feature_angle,
+        )
+        output.ShallowCopy(gb.to_pyvista())
+
+
+# ---------------------------------------------------------------------------- filters
+def _dummy_gbuffer() -> GBuffer:
+    """An 8x8 G-buffer of a plane facing the camera: a cheap input for validating parameters."""
+    n = 8
+    cam = vtkCamera()
+    cam.SetPosition(0.0, 0.0, 10.0)
+    cam.SetClippingRange(1.0, 20.0)
+    info = CameraInfo.from_vtk(cam, (n, n))
+    y, x = np.mgrid[0:n, 0:n].astype(np.float32)
+    world = np.stack([x, -y, np.zeros_like(x)], axis=-1)
+    depth = np.full((n, n), 10.0, np.float32)
+    return GBuffer(
+        depth=depth,
+        sz=info.sz_from_depth(depth).astype(np.float32),
+        normal=np.broadcast_to(np.array([0, 0, 1], np.float32), (n, n, 3)).copy(),
+        world=world,
+        object_id=np.zeros((n, n), np.int32),
+        cell_id=np.zeros((n, n), np.int64),
+        mask=np.ones((n, n), bool),
+        camera=info,
+    )
+
+
+_DUMMY: dict[str, Any] = {}
+
+
+def _dummy_input(kind: str, components: int) -> Any:
+    key = f"{kind}{components}"
+    if key not in _DUMMY:
+        if kind == "gbuffer":
+            _DUMMY[key] = _dummy_gbuffer()
+        elif components == 3:
+            v = np.array([0.3, 0.2, 0.9], np.float32)
+            _DUMMY[key] = np.broadcast_to(v / np.linalg.norm(v), (8, 8, 3)).copy()
+        else:
+            y, x = np.mgrid[0:8, 0:8].astype(np.float32)
+            _DUMMY[key] = x + 0.5 * y
+    return _DUMMY[key]
+
+
+class _ParamFilter(_GBufferAlgorithm):
+    """Keyword parameters of a wrapped function: validated setters that call Modified()."""
+
+    _func: Callable[..., np.ndarray]
+    _kind = "array"  # or "gbuffer"
+    _params: tuple[str, ...] = ()
+    _dry_components = 1
+    # parameters a dry run needs when the user has not set them (e.g. contour levels)
+    _dry_fill: Callable[[dict[str, Any]], dict[str, Any]] = staticmethod(lambda p: p)
+
+    def __init__(self) -> None:
+        super().__init__(1)
+        self._values: dict[str, Any] = {}
+        self._output_name = self._func.__name__
+
+    def SetParameter(self, name: str, value: Any) -> None:
+        """Set keyword ``name`` of the wrapped function; ``None`` restores its default.
+
+        Raises
+        ------
+        InputError
+            Unknown name, or a value the function rejects (checked on a tiny input now).
+        """
+        if name not in self._params:
+            raise InputError(
+                f"{type(self).__name__}: unknown parameter {name!r}; expected one of "
+                f"{list(self._params)}"
+            )
+        # compare with the value in effect (the default when unset): no change, no Modified()
+        if value is None:
+            if name not in self._values:
+                return
+        elif _same(self.GetParameter(name), value):
+            return
+        candidate = dict(self._values)
+        if value is None:
+            candidate.pop(name, None)
+        else:
+            candidate[name] = value
+        self._validate(name, candidate)
+        self._values = candidate
+        self.Modified()
+
+    def GetParameter(self, name: str) -> Any:
+        """The value set for ``name``, or the function's default."""
+        if name not in self._params:
+            raise InputError(f"{type(self).__name__}: unknown parameter {name!r}")
+        if name in self._values:
+            return self._values[name]
+        return inspect.signature(self._func).parameters[name].default
+
+    def GetParameters(self) -> dict[str, Any]:
+        """The parameters set explicitly (what is passed to the function)."""
+        return dict(self._values)
+
+    def _validate(self, name: str, candidate: dict[str, Any]) -> None:
+        def run(params: dict[str, Any]) -> Exception | None:
+            try:
+                self._func(_dummy_input(self._kind, self._dry_components), **self._dry_fill(params))
+            except (InputError, TypeError, ValueError) as exc:
+                return exc
+            return None
+
+        err = run(candidate)
+        if err is None:
+            return
+        # blame the new value only if the parameters were fine without it (a parameter that is
+        # only valid together with another one, set later, must not be refused now)
+        before = run(self._values)
+        if before is None or str(before) != str(err):
+            if isinstance(err, InputError):
+                raise InputError(f"{type(self).__name__}.{name}: {err}") from err
+            raise InputError(f"{type(self).__name__}.{name}: bad value ({err})") from err
+
+    def SetOutputArrayName(self, name: str) -> None:
+        """Name of the result array (default: the function's name, e.g. ``"contour_lines"``)."""
+        if not isinstance(name, str) or not name:
+            raise InputError(f"output array name: expected a non-empty string, got {name!r}")
+        if name != self._output_name:
+            self._output_name = name
+            self.Modified()
+
+    def GetOutputArrayName(self) -> str:
+        return self._output_name
+
+
+def _add_accessors(cls: type[_ParamFilter]) -> None:
+    """``Set<Name>``/``Get<Name>`` for every keyword parameter of the wrapped function."""
+    for pname in cls._params:
+        camel = _camel(pname)
+
+        def setter(self: _ParamFilter, *value: Any, _p: str = pname) -> None:
+            # SetLight(0, 0, 1) and SetLight((0, 0, 1)) both work, as in VTK
+            self.SetParameter(_p, value[0] if len(value) == 1 else value)
+
+        def getter(self: _ParamFilter, _p: str = pname) -> Any:
+            return self.GetParameter(_p)
+
+        setter.__name__ = f"Set{camel}"
+        setter.__doc__ = f"Set ``{pname}`` of :func:`{cls._func.__name__}` (None: default)."
+        getter.__name__ = f"Get{camel}"
+        getter.__doc__ = f"``{pname}`` of :func:`{cls._func.__name__}`."
+        if not hasattr(cls, setter.__name__):
+            setattr(cls, setter.__name__, setter)
+            setattr(cls, getter.__name__, getter)
+
+
+class _ArrayFilter(_ParamFilter):
+    """A numpy image function on one named point array of a vtkImageData.
+
+    ``SetInputArrayName(name)`` picks the array (None: the active scalars),
+    ``SetInputComponent(i)`` one component of a vector array (e.g. 2: the world z),
+    ``SetMaskArrayName(name)`` the coverage passed as ``mask=`` (default ``"mask"``, used when
+    the input has it; None: no mask). The output is a shallow copy of the input with the
+    result added as point array ``GetOutputArrayName()``, in the same pixel order.
+    """
+
+    _default_input: str | None = None
+
+    def __init__(self) -> None:
+        super().__init__()
+        self._input_name = self._default_input
+        self._component: int | None = None
+        self._mask_name: str | None = "mask"
+
+    def SetInputArrayName(self, name: str | None) -> None:
+        if name is not None and (not isinstance(name, str) or not name):
+            raise InputError(f"input array name: expected a non-empty string, got {name!r}")
+        if name != self._input_name:
+            self._input_name = name
+            self.Modified()
+
+    def GetInputArrayName(self) -> str | None:
+        return self._input_name
+
+    def SetInputComponent(self, component: int | None) -> None:
+        if component is not None and (
+            isinstance(component, bool)
+            or not isinstance(component, (int, np.integer))
+            or component < 0
+        ):
+            raise InputError(f"input component: expected an index >= 0 or None, got {component!r}")
+        value = None if component is None else int(component)
+        if value != self._component:
+            self._component = value
+            self.Modified()
+
+    def SetMaskArrayName(self, name: str | None) -> None:
+        if name is not None and (not isinstance(name, str) or not name):
+            raise InputError(f"mask array name: expected a non-empty string, got {name!r}")
+        if name != self._mask_name:
+            self._mask_name = name
+            self.Modified()
+
+    def _supersample_hint(self) -> int | None:
+        # same size as the input: whatever is upstream
+        return _upstream_supersample(self)
+
+    def _execute(self, inInfo: Any, output: vtkImageData, out_info: Any) -> None:
+        what = type(self).__name__
+        image = _image_of(vtkImageData.GetData(inInfo[0], 0), what)
+        values, _ = _read_array(image, self._input_name, what)
+        if self._component is not None:
+            if values.ndim != 3 or self._component >= values.shape[2]:
+                ncomp = values.shape[2] if values.ndim == 3 else 1
+                raise InputError(
+                    f"{what}: component {self._component} of array {self._input_name!r}, "
+                    f"which has {ncomp}"
+                )
+            values = values[..., self._component]
+        kwargs = dict(self._values)
+        pd = image.GetPointData()
+        if self._mask_name is not None and pd.GetArray(self._mask_name) is not None:
+            kwargs["mask"] = _read_array(image, self._mask_name, what)[0].astype(bool)
+        result = self._func(values, **kwargs)
+        output.ShallowCopy(image)
+        _write_array(output, self._output_name, result)
+
+
+class _GBufferFilter(_ParamFilter):
+    """A function of a whole GBuffer, rebuilt from the input image (capture's output)."""
+
+    _kind = "gbuffer"
+
+    def _supersample_hint(self) -> int | None:
+        return 1
+
+    def RequestInformation(self, request, inInfo, outInfo):
+        # results are at the G-buffer's output size: announce it when the supersampling is
+        # known from upstream (otherwise the input's extent, right for supersample == 1)
+        k = _upstream_supersample(self)
+        in_info = inInfo[0].GetInformationObject(0)
+        if k and k > 1 and in_info.Has(_SDDP.WHOLE_EXTENT()):
+            ext = in_info.Get(_SDDP.WHOLE_EXTENT())
+            w, h = (ext[1] - ext[0] + 1) // k, (ext[3] - ext[2] + 1) // k
+            outInfo.GetInformationObject(0).Set(_SDDP.WHOLE_EXTENT(), (0, w - 1, 0, h - 1, 0, 0), 6)
+        return 1
+
+    def _execute(self, inInfo: Any, output: vtkImageData, out_info: Any) -> None:
+        what = type(self).__name__
+        image = _image_of(vtkImageData.GetData(inInfo[0], 0), what)
+        gb = GBuffer.from_pyvista(pv.wrap(image), source=f"{what} input")
+        result = self._func(gb, **self._values)
+        if gb.supersample == 1:
+            output.ShallowCopy(image)
+        else:
+            h, w = gb.output_shape
+            announced = out_info.Get(_SDDP.WHOLE_EXTENT())
+            if announced is not None and tuple(announced) != (0, w - 1, 0, h - 1, 0, 0):
+                # downstream VTK filters were promised another size: fail rather than let them
+                # read past the image (supersampling was not known before executing)
+                raise InputError(
+                    f"{what}: the input G-buffer is supersampled x{gb.supersample}, which "
+                    "could not be known before executing; connect this filter after "
+                    "vtkGBufferCapture, this module's array filters or SetInputData"
+                )
+            output.SetDimensions(w, h, 1)
+            output.SetOrigin(image.GetOrigin())
+            output.SetSpacing(image.GetSpacing())
+        _write_array(output, self._output_name, result)
+
+
+def _make(
+    name: str,
+    base: type[_ParamFilter],
+    func: Callable[..., np.ndarray],
+    *,
+    default_input: str | None = None,
+    dry_components: int = 1,
+    dry_fill: Callable[[dict[str, Any]], dict[str, Any]] | None = None,
+) -> type[_ParamFilter]:
+    # keyword parameters that are images come from arrays (mask), not setters
+    params = tuple(
+        p.name
+        for p in inspect.signature(func).parameters.values()
+        if p.kind is inspect.Parameter.KEYWORD_ONLY and p.name not in ("mask", "gradient")
+    )
+    ns: dict[str, Any] = {
+        "_func": staticmethod(func),
+        "_params": params,
+        "_dry_components": dry_components,
+        "__doc__": (
+            f":func:`sciviz_gbuf.filters.{func.__name__}` as a VTK filter "
+            f"({'array' if base is _ArrayFilter else 'G-buffer'} filter; output array "
+            f"``{func.__name__!r}``).\n\nParameters (``Set<Name>``/``Get<Name>`` or "
+            f"``SetParameter``): {', '.join(params)}."
+        ),
+        "__module__": __name__,
+    }
+    if base is _ArrayFilter:
+        ns["_default_input"] = default_input
+        ns["__doc__"] += f" Default input array: {default_input or 'the active scalars'!s}."
+    if dry_fill is not None:
+        ns["_dry_fill"] = staticmethod(dry_fill)
+    cls = type(name, (base,), ns)
+    _add_accessors(cls)
+    return cls
+
+
+def _fill_levels(p: dict[str, Any]) -> dict[str, Any]:
+    # contour_lines / color_bands need interval= or levels=; dry-run with one if neither is set
+    if "interval" not in p and "levels" not in p:
+        return {**p, "interval": 1.0}
+    return p
+
+
+vtkGBufferSobelGradient = _make(
+    "vtkGBufferSobelGradient", _ArrayFilter, F.sobel_gradient, default_input="sz"
+)
+vtkGBufferSecondOrder = _make(
+    "vtkGBufferSecondOrder", _ArrayFilter, F.second_order, default_input="sz"
+)
+vtkGBufferC1Discontinuity = _make(
+    "vtkGBufferC1Discontinuity", _ArrayFilter, F.c1_discontinuity, default_input="sz"
+)
+vtkGBufferContourLines = _make(
+    "vtkGBufferContourLines",
+    _ArrayFilter,
+    F.contour_lines,
+    default_input="depth",
+    dry_fill=_fill_levels,
+)
+vtkGBufferHatching = _make("vtkGBufferHatching", _ArrayFilter, F.hatching, default_input="depth")
+vtkGBufferHillshade = _make("vtkGBufferHillshade", _ArrayFilter, F.hillshade)
+vtkGBufferColorBands = _make(
+    "vtkGBufferColorBands", _ArrayFilter, F.color_bands, dry_fill=_fill_levels
+)
+vtkGBufferLambert = _make(
+    "vtkGBufferLambert", _ArrayFilter, F.lambert, default_input="normal", dry_components=3
+)
+vtkGBufferProfileEdges = _make("vtkGBufferProfileEdges", _GBufferFilter, F.profile_edges)
+vtkGBufferInternalEdges = _make("vtkGBufferInternalEdges", _GBufferFilter, F.internal_edges)
+vtkGBufferCreaseEdges = _make("vtkGBufferCreaseEdges", _GBufferFilter, F.crease_edges)
+vtkGBufferIdEdges = _make("vtkGBufferIdEdges", _GBufferFilter, F.id_edges)
+vtkGBufferEdgeMap = _make("vtkGBufferEdgeMap", _GBufferFilter, F.edge_map)
+vtkGBufferReflectionLines = _make("vtkGBufferReflectionLines", _GBufferFilter, F.reflection_lines)
+vtkGBufferIsophotes = _make("vtkGBufferIsophotes", _GBufferFilter, F.isophotes)
+
+#: Array filters by function name: ``vtkImageData`` array -> new array (same size).
+ARRAY_FILTERS: dict[str, type[_ParamFilter]] = {
+    c._func.__name__: c
+    for c in (
+        vtkGBufferSobelGradient,
+        vtkGBufferSecondOrder,
+        vtkGBufferC1Discontinuity,
+        vtkGBufferContourLines,
+        vtkGBufferHatching,
+        vtkGBufferHillshade,
+        vtkGBufferColorBands,
+        vtkGBufferLambert,
+    )
+}
+#: G-buffer filters by function name: whole G-buffer image -> new array (output size).
+GBUFFER_FILTERS: dict[str, type[_ParamFilter]] = {
+    c._func.__name__: c
+    for c in (
+        vtkGBufferProfileEdges,
+        vtkGBufferInternalEdges,
+        vtkGBufferCreaseEdges,
+        vtkGBufferIdEdges,
+        vtkGBufferEdgeMap,
+        vtkGBufferReflectionLines,
+        vtkGBufferIsophotes,
+    )
+}
+#: Every algorithm class by name (``"capture"`` and the function names).
+ALGORITHMS: dict[str, type[_GBufferAlgorithm]] = {
+    "capture": vtkGBufferCapture,
+    **ARRAY_FILTERS,
+    **GBUFFER_FILTERS,
+}
