@@ -5,6 +5,8 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
+import numpy as np
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -34,6 +36,13 @@ def test_readme_python_example_runs(tmp_path, monkeypatch):
     assert npr["tech"].shape == npr["cartoon"].shape == npr["ink"].shape == (360, 480, 3)
     assert npr["drawing"].shape == npr["copied"].shape == (360, 480)
     assert (tmp_path / "nut_gooch.png").is_file()
+    plug = next(ns for ns in spaces if "enhanced" in ns)
+    assert plug["drawn"]["RGB"].shape == (320 * 240, 3)
+    assert plug["g"].output_shape == (240, 320)
+    assert not np.array_equal(plug["enhanced"], plug["plain"])
+    assert not np.array_equal(plug["enhanced"], plug["moved"])
+    pipe = next(ns for ns in spaces if "runs" in ns)
+    assert pipe["runs"] == (1, 2)
 
 
 def test_quick_start_has_two_commands_and_ci_runs_the_test_one():
