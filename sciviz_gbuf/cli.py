@@ -522,6 +522,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     _add_topo(sub)
     _add_birdseye(sub)
+    from .cli_explore import add_explore
     from .cli_medical import add_ct
     from .cli_mesh import add_mesh
     from .cli_surface import add_patches
@@ -529,6 +530,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_ct(sub)
     add_patches(sub)
     add_mesh(sub)
+    add_explore(sub)
 
     p = sub.add_parser("info", help="describe a saved G-buffer file")
     p.add_argument("file", help=".npz or .vti written by capture")

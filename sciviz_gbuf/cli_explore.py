@@ -1,0 +1,207 @@
+"""The ``sciviz-gbuf explore`` command: a local trame web app around :class:`Explorer`.
+
+The picture travels as a JPEG data URL bound to an ``<img>`` (no remote VTK rendering): each
+control change re-runs only the filters on the cached G-buffer and replaces the URL; camera
+controls capture again. The server listens on 127.0.0.1 only.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+__all__ = ["add_explore", "build_app"]
+
+#: Controls changing only image-space parameters: (state name, label, min, max, step).
+SLIDERS = (
+    ("crease_angle", "crease angle (°)", 1.0, 90.0, 1.0),
+    ("depth_jump", "depth jump (pixel footprints)", 0.1, 10.0, 0.1),
+    ("width", "line width (px)", 1.0, 6.0, 0.5),
+    ("contour_width", "contour width (px)", 0.5, 5.0, 0.5),
+    ("bands", "colour bands (0: none)", 0, 16, 1),
+    ("light_azimuth", "light azimuth (°)", -180.0, 180.0, 1.0),
+    ("light_elevation", "light elevation (°)", 0.0, 90.0, 1.0),
+)
+#: Camera controls (they capture again).
+CAMERA = (
+    ("camera_azimuth", "camera azimuth (°)", -180.0, 180.0, 1.0),
+    ("camera_elevation", "camera elevation (°)", -89.0, 89.0, 1.0),
+    ("camera_zoom", "zoom", 0.5, 4.0, 0.05),
+)
+
+
+def _dom_id(name: str) -> str:
+    return "slider-" + name.replace("_", "-")
+
+
+def build_app(explorer, *, port: int = 8080):
+    """A trame server showing ``explorer``'s picture with a control per parameter.
+
+    Returns
+    -------
+    trame_server.Server, not started (``server.start(host="127.0.0.1", ...)``).
+    """
+    from trame.app import get_server
+    from trame.ui.vuetify3 import SinglePageLayout
+    from trame.widgets import html
+    from trame.widgets import vuetify3 as v3
+
+    from .explorer import STYLES, Params, encode_jpeg_data_url
+
+    server = get_server(f"sciviz-gbuf-explore-{port}", client_type="vue3")
+    state = server.state
+    p = Params()
+    lo, hi = explorer.height_range
+    span = max(hi - lo, 1e-9)
+    state.update(
+        {
+            "style": p.style,
+            **{name: getattr(p, name) for name, *_ in SLIDERS},
+            "contour_interval": 0.0,
+            "contour_max": float(f"{span / 2:.3g}"),
+            "contour_step": float(f"{span / 200:.2g}"),
+            "camera_azimuth": explorer.camera.azimuth,
+            "camera_elevation": explorer.camera.elevation,
+            "camera_zoom": explorer.camera.zoom,
+            "image_url": "",
+            "update_ms": 0.0,
+            "filter_ms": 0.0,
+            "error": "",
+        }
+    )
+
+    def refresh() -> None:
+        t0 = time.perf_counter()
+        values = {name: state[name] for name, *_ in SLIDERS}
+        values["style"] = state.style
+        values["contour_interval"] = state.contour_interval
+        try:
+            rgb = explorer.render_image(values)
+        except Exception as exc:  # shown in the page; the last good picture stays
+            state.error = str(exc)
+            return
+        state.error = ""
+        state.image_url = encode_jpeg_data_url(rgb)
+        state.filter_ms = round(explorer.last_ms, 1)
+        state.update_ms = round((time.perf_counter() - t0) * 1e3, 1)
+
+    @state.change("style", "contour_interval", *(name for name, *_ in SLIDERS))
+    def _on_params(**_) -> None:
+        refresh()
+
+    @state.change(*(name for name, *_ in CAMERA))
+    def _on_camera(**_) -> None:
+        try:
+            explorer.set_camera(state.camera_azimuth, state.camera_elevation, state.camera_zoom)
+        except Exception as exc:
+            state.error = str(exc)
+            return
+        refresh()
+
+    def slider(name: str, label: str, lo_: float, hi_, step) -> None:
+        # The id sits on a wrapper: Vuetify hands a slider's own id to its label.
+        with html.Div(id=_dom_id(name)):
+            v3.VSlider(
+                v_model=(name,),
+                label=label,
+                min=lo_,
+                max=hi_,
+                step=step,
+                thumb_label=True,
+                density="compact",
+                hide_details=True,
+                classes="my-1",
+            )
+
+    with SinglePageLayout(server) as layout:
+        layout.title.set_text("sciviz-gbuf explorer")
+        with layout.toolbar:
+            v3.VSpacer()
+            html.Span(
+                "update {{ update_ms }} ms (filters {{ filter_ms }} ms)",
+                id="update-text",
+                classes="text-body-2",
+            )
+            html.Span("{{ update_ms }}", id="update-ms", style="display: none")
+        with layout.content:
+            with v3.VContainer(fluid=True, classes="d-flex flex-row pa-2"):
+                with v3.VCol(cols=3, style="max-width: 320px; min-width: 260px"):
+                    with html.Div(id="select-style"):
+                        v3.VSelect(
+                            v_model=("style",),
+                            items=("styles", list(STYLES)),
+                            label="style",
+                            density="compact",
+                            hide_details=True,
+                        )
+                    for spec in SLIDERS[:3]:
+                        slider(*spec)
+                    slider(
+                        "contour_interval",
+                        "contour interval (0: none)",
+                        0.0,
+                        ("contour_max",),
+                        ("contour_step",),
+                    )
+                    for spec in SLIDERS[3:]:
+                        slider(*spec)
+                    v3.VDivider(classes="my-2")
+                    for spec in CAMERA:
+                        slider(*spec)
+                    html.Div("{{ error }}", id="error", classes="text-error")
+                with v3.VCol():
+                    html.Img(src=("image_url",), id="image", style="max-width: 100%")
+    refresh()
+    return server
+
+
+def _cmd_explore(args: argparse.Namespace) -> int:
+    from .errors import InputError
+    from .explorer import Explorer
+
+    try:
+        import trame  # noqa: F401
+        import trame_vuetify  # noqa: F401
+    except ImportError as exc:
+        raise InputError(
+            f"explore needs trame and trame-vuetify: pip install 'sciviz-gbuf[web]' ({exc})"
+        ) from exc
+    explorer = Explorer.from_file(args.file, window_size=args.size)
+    server = build_app(explorer, port=args.port)
+    print(f"sciviz-gbuf explore: http://127.0.0.1:{args.port}/", flush=True)
+    # trame parses sys.argv itself (--host among others): hide ours so nothing can move the
+    # server off the loopback address.
+    sys.argv = sys.argv[:1]
+    server.start(
+        host="127.0.0.1",
+        port=args.port,
+        open_browser=False,
+        show_connection_info=False,
+        disable_logging=True,
+    )
+    return 0
+
+
+def add_explore(sub) -> None:
+    """Add the ``explore`` sub-command to the ``sciviz-gbuf`` parser."""
+    from .cli import _positive_int, _size
+
+    p = sub.add_parser(
+        "explore",
+        help="web explorer on 127.0.0.1: every enhancement parameter live (needs trame)",
+        description="Capture a mesh, DEM or DICOM folder once and serve a local web page "
+        "(trame, 127.0.0.1 only) with the picture and controls for the edge thresholds, "
+        "contour lines, colour bands, light, style and camera. A control re-runs only the "
+        "filters on the cached G-buffer; moving the camera captures again.",
+    )
+    p.add_argument(
+        "file",
+        nargs="?",
+        default=None,
+        help="mesh file, DEM (.tif/.asc/.hgt/.dem/.npy/.npz) or DICOM folder "
+        "(default: the bundled machine nut)",
+    )
+    p.add_argument("--port", type=_positive_int, default=8080, help="TCP port (default 8080)")
+    p.add_argument("--size", type=_size, default=(1024, 768), help="image size WxH")
+    p.set_defaults(func=_cmd_explore)

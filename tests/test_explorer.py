@@ -1,0 +1,311 @@
+"""The web explorer: filters re-run on the cached G-buffer, camera moves re-capture, and a real
+headless Chromium sees the picture change within 200 ms of moving a slider."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import time
+import urllib.request
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sciviz_gbuf.cli import build_parser
+from sciviz_gbuf.datasets import load_nut
+from sciviz_gbuf.errors import InputError
+from sciviz_gbuf.explorer import Explorer, Params, encode_jpeg_data_url, load_scene, style_image
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def nut_explorer() -> Explorer:
+    return Explorer(load_nut(), window_size=(1024, 768))
+
+
+def _max_diff(a: np.ndarray, b: np.ndarray) -> int:
+    return int(np.abs(a.astype(np.int16) - b.astype(np.int16)).max())
+
+
+def test_render_changes_with_a_parameter_and_equals_the_direct_functions(nut_explorer):
+    e = nut_explorer
+    base = e.render_image(Params())
+    assert base.shape == (768, 1024, 3) and base.dtype == np.uint8
+    for change in (
+        {"crease_angle": 12.0},
+        {"depth_jump": 4.0},
+        {"width": 3.0},
+        {"light_azimuth": 20.0},
+        {"style": "gooch"},
+        {"style": "lines"},
+        {"bands": 5},
+        {"contour_interval": 4.0, "contour_width": 2.0},
+    ):
+        img = e.render_image(Params(**change))
+        assert _max_diff(img, base) > 0, change
+        # The cached layers and float32 composite reproduce the package's own functions
+        # (illustrate, styles, color_bands, contour_lines) to within one grey level.
+        ref = style_image(e.gbuffer, e.params, height_range=e.height_range)
+        assert _max_diff(img, ref) <= 1, change
+
+
+def test_parameters_do_not_recapture_but_the_camera_does(nut_explorer):
+    e = nut_explorer
+    n = e.captures
+    for ca in (20.0, 25.0, 40.0):
+        e.render_image({"crease_angle": ca, "bands": 3, "style": "fig7"})
+    assert e.captures == n
+    depth = e.gbuffer.depth.copy()
+    e.set_camera(azimuth=e.camera.azimuth + 30.0)
+    assert e.captures == n + 1
+    assert not np.array_equal(np.nan_to_num(depth), np.nan_to_num(e.gbuffer.depth))
+    e.set_camera(azimuth=e.camera.azimuth)  # unchanged: nothing to capture
+    assert e.captures == n + 1
+    e.set_camera(azimuth=45.0)
+
+
+def test_update_time_at_1024x768(nut_explorer, capsys):
+    """Per-update cost of the filters alone (reported; the asserts are loose for a busy CI)."""
+    e = nut_explorer
+    e.render_image(Params())
+    light = []
+    for az in range(100, 110):
+        e.render_image({"light_azimuth": float(az)})
+        light.append(e.last_ms)
+    crease = []
+    for ca in range(20, 26):
+        e.render_image({"crease_angle": float(ca)})
+        crease.append(e.last_ms)
+    contour = []
+    for q in (2.0, 3.0, 4.0, 5.0):
+        e.render_image({"contour_interval": q})
+        contour.append(e.last_ms)
+    t0 = time.perf_counter()
+    url = encode_jpeg_data_url(e.render_image())
+    jpeg_ms = (time.perf_counter() - t0) * 1e3 - e.last_ms
+    assert url.startswith("data:image/jpeg;base64,")
+    with capsys.disabled():
+        print(
+            f"\nexplorer 1024x768 median ms: light {np.median(light):.1f}, crease angle "
+            f"{np.median(crease):.1f}, contour interval {np.median(contour):.1f}, "
+            f"JPEG {jpeg_ms:.1f}"
+        )
+    assert np.median(light) < 100.0
+    assert np.median(crease) < 400.0
+
+
+def test_bad_input_is_an_input_error_naming_the_parameter(nut_explorer, tmp_path):
+    e = nut_explorer
+    with pytest.raises(InputError, match="style"):
+        e.render_image({"style": "watercolour"})
+    with pytest.raises(InputError, match="crease_angle"):
+        e.render_image({"crease_angle": -1.0})
+    with pytest.raises(InputError, match="bands"):
+        e.render_image({"bands": -2})
+    with pytest.raises(InputError, match="colour"):
+        e.render_image({"colour": 1})
+    with pytest.raises(InputError, match="zoom"):
+        e.set_camera(zoom=0.0)
+    missing = tmp_path / "nope.stl"
+    with pytest.raises(InputError, match=r"nope\.stl"):
+        load_scene(missing)
+
+
+def test_dem_is_explored_as_a_height_field():
+    from sciviz_gbuf.datasets import load_jacksboro_dem
+
+    dem = load_jacksboro_dem()
+    e = Explorer(dem.to_pyvista(), window_size=(256, 192), kind="dem")
+    a = e.render_image({"contour_interval": 10.0})
+    b = e.render_image({"contour_interval": 25.0})
+    assert _max_diff(a, b) > 0
+    assert e.captures == 1
+
+
+def test_cli_parses_explore(tmp_path, capsys):
+    from sciviz_gbuf.cli import main
+
+    assert main(["explore", str(tmp_path / "nope.stl"), "--port", str(_free_port())]) == 2
+    assert "nope.stl" in capsys.readouterr().err
+    args = build_parser().parse_args(["explore", "part.stl", "--port", "9001", "--size", "64x48"])
+    assert (args.file, args.port, args.size) == ("part.stl", 9001, (64, 48))
+    assert build_parser().parse_args(["explore"]).file is None
+
+
+# -- browser ------------------------------------------------------------------------------
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _listening_addresses(port: int) -> list[str]:
+    """Local addresses (hex, as the kernel lists them) of sockets listening on ``port``."""
+    out = []
+    for table in ("/proc/net/tcp", "/proc/net/tcp6"):
+        try:
+            lines = Path(table).read_text().splitlines()[1:]
+        except OSError:
+            continue
+        for line in lines:
+            parts = line.split()
+            addr, p = parts[1].rsplit(":", 1)
+            if int(p, 16) == port and parts[3] == "0A":  # 0A: LISTEN
+                out.append(addr)
+    return out
+
+
+def _non_loopback_address() -> str | None:
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        try:
+            s.connect(("10.255.255.255", 1))  # no packet is sent: only picks the route
+            ip = s.getsockname()[0]
+        except OSError:
+            return None
+    return None if ip.startswith("127.") else ip
+
+
+@pytest.fixture
+def explorer_server():
+    pytest.importorskip("trame")
+    pytest.importorskip("trame_vuetify")
+    port = _free_port()
+    env = dict(os.environ, PYTHONUNBUFFERED="1")
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "sciviz_gbuf", "explore", "--port", str(port), "--size", "512x384"],
+        cwd=ROOT,
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        start_new_session=True,  # its own process group: everything it starts ends with it
+    )
+    try:
+        deadline = time.monotonic() + 40.0
+        while True:
+            if proc.poll() is not None:
+                out = proc.stdout.read().decode(errors="replace") if proc.stdout else ""
+                pytest.fail(f"explore exited with {proc.returncode}:\n{out}")
+            try:
+                with urllib.request.urlopen(f"http://127.0.0.1:{port}/", timeout=1) as r:
+                    if r.status == 200:
+                        break
+            except OSError:
+                pass
+            if time.monotonic() > deadline:
+                pytest.fail("explore did not answer within 40 s")
+            time.sleep(0.2)
+        yield port
+    finally:
+        os.killpg(proc.pid, signal.SIGTERM)
+        try:
+            proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait(timeout=10)
+        if proc.stdout:
+            proc.stdout.close()
+
+
+def test_server_listens_on_loopback_only(explorer_server):
+    port = explorer_server
+    addrs = _listening_addresses(port)
+    # 0100007F is 127.0.0.1 in the kernel's little-endian hex; no IPv6 or wildcard listener.
+    assert addrs == ["0100007F"], addrs
+    ip = _non_loopback_address()
+    if ip is not None:
+        with socket.socket() as s, pytest.raises(OSError):
+            s.settimeout(2)
+            s.connect((ip, port))
+
+
+_CHROMIUM = shutil.which("chromium")
+_CHROMEDRIVER = shutil.which("chromedriver") or (
+    "/usr/bin/chromedriver" if Path("/usr/bin/chromedriver").exists() else None
+)
+
+# Installed in the page before the key press: the time the <img> src changes, in the page's
+# own clock, so the measurement excludes selenium's round trips.
+_WATCH = """
+window.__t1 = null;
+const img = document.getElementById('image');
+new MutationObserver(() => { if (window.__t1 === null) window.__t1 = performance.now(); })
+    .observe(img, {attributes: true, attributeFilter: ['src']});
+const thumb = document.querySelector('#slider-crease-angle [role=slider]');
+window.__t0 = performance.now();
+thumb.dispatchEvent(new KeyboardEvent('keydown', {key: 'ArrowRight', bubbles: true}));
+"""
+
+
+@pytest.mark.skipif(
+    _CHROMIUM is None or _CHROMEDRIVER is None,
+    reason="needs Debian's chromium and chromium-driver (apt-get install chromium chromium-driver)",
+)
+def test_browser_slider_updates_the_image_within_200_ms(explorer_server, capsys):
+    pytest.importorskip("selenium")
+    from selenium import webdriver
+    from selenium.webdriver.chrome.service import Service
+
+    port = explorer_server
+    opts = webdriver.ChromeOptions()
+    for a in ("--headless=new", "--no-sandbox", "--disable-gpu", "--window-size=1280,900"):
+        opts.add_argument(a)
+    opts.binary_location = _CHROMIUM
+    driver = webdriver.Chrome(options=opts, service=Service(_CHROMEDRIVER))
+    try:
+        driver.get(f"http://127.0.0.1:{port}/")
+        get_src = "const i = document.getElementById('image'); return i && i.getAttribute('src');"
+        deadline = time.monotonic() + 30.0
+        while not (src0 := driver.execute_script(get_src)):
+            assert time.monotonic() < deadline, "the explorer showed no image within 30 s"
+            time.sleep(0.05)
+        assert src0.startswith("data:image/jpeg;base64,")
+        value = "return document.querySelector('#slider-crease-angle [role=slider]')" \
+            ".getAttribute('aria-valuenow');"  # fmt: skip
+        before = driver.execute_script(value)
+
+        t0 = time.perf_counter()
+        driver.execute_script(_WATCH)
+        while (t1 := driver.execute_script("return window.__t1;")) is None:
+            assert time.perf_counter() - t0 < 5.0, "the image did not change within 5 s"
+            time.sleep(0.005)
+        wall_ms = (time.perf_counter() - t0) * 1e3
+        page_ms = t1 - driver.execute_script("return window.__t0;")
+        src1 = driver.execute_script(get_src)
+        after = driver.execute_script(value)
+        server_ms = driver.execute_script(
+            "return document.getElementById('update-ms').textContent;"
+        )
+    finally:
+        driver.quit()
+    with capsys.disabled():
+        print(
+            f"\nbrowser 512x384: key press -> new image {page_ms:.1f} ms (page clock), "
+            f"{wall_ms:.1f} ms incl. selenium polling; server update {server_ms} ms"
+        )
+    assert float(after) == float(before) + 1.0  # the slider moved one step
+    assert src1 != src0
+    assert page_ms <= 200.0
+
+
+def test_dicom_folder_is_explored_as_its_bone_surface(tmp_path):
+    from dicom_factory import write_series
+
+    # A bone ball (1000 HU) in air: raw = HU + 1024 with the factory's intercept.
+    n = 24
+    z, y, x = np.mgrid[:n, :n, :n] - (n - 1) / 2.0
+    vol = np.where(x**2 + y**2 + z**2 < 8.0**2, 2024, 0).astype(np.uint16)
+    write_series(tmp_path, list(vol), np.array([[0.0, 0.0, float(k)] for k in range(n)]))
+    e = Explorer.from_file(tmp_path, window_size=(160, 120))
+    assert e.kind == "dicom"
+    a = e.render_image({"style": "toon"})
+    b = e.render_image({"style": "toon", "light_azimuth": -60.0})
+    assert e.gbuffer.mask.mean() > 0.1  # the ball is in view
+    assert _max_diff(a, b) > 0
