@@ -79,7 +79,10 @@ def _levels(levels, name: str = "levels") -> np.ndarray:
 
 
 def _positive(value, name: str) -> float:
-    v = float(value)
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"{name}: expected a finite number > 0, got {value!r}") from None
     if not (np.isfinite(v) and v > 0):
         raise InputError(f"{name}: expected a finite number > 0, got {value!r}")
     return v

@@ -29,6 +29,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..filters import lambert, profile_edges
+from ..filters.operators import _positive
 from ..gbuffer import GBuffer
 from ..recipes.illustration import LIGHT
 
@@ -38,16 +39,6 @@ __all__ = ["SPACES", "hatch", "stroke_ink", "tone_coverage"]
 SPACES = ("screen", "uv")
 # More families than this do not darken anything further and only cost time.
 _MAX_FAMILIES = 16
-
-
-def _positive(value, name: str) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{name}: expected a finite number > 0, got {value!r}") from None
-    if not (np.isfinite(v) and v > 0):
-        raise InputError(f"{name}: expected a finite number > 0, got {value!r}")
-    return v
 
 
 def _color(value, name: str) -> np.ndarray:

@@ -19,6 +19,7 @@ from scipy import ndimage
 
 from ..errors import InputError
 from ..filters import hatching, lambert, profile_edges
+from ..filters.operators import _positive
 from ..gbuffer import GBuffer
 from ..recipes.illustration import LIGHT
 
@@ -38,16 +39,6 @@ COMBOS = {
 TONE_NONE = 0.1
 #: ... and above which its lines are drawn in full.
 TONE_FULL = 0.7
-
-
-def _positive(value, name: str) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{name}: expected a finite number > 0, got {value!r}") from None
-    if not (np.isfinite(v) and v > 0):
-        raise InputError(f"{name}: expected a finite number > 0, got {value!r}")
-    return v
 
 
 def modulation(shade: np.ndarray) -> np.ndarray:
