@@ -24,7 +24,14 @@ import pyvista as pv
 from .capture import capture
 from .compose import to_uint8
 from .errors import InputError
-from .filters import color_bands, contour_lines, crease_edges, edge_map, profile_edges
+from .filters import (
+    color_bands,
+    contour_lines,
+    crease_edges,
+    edge_map,
+    enhance,
+    profile_edges,
+)
 from .gbuffer import GBuffer
 from .recipes.illustration import fig7_edge_map, illustrate, shade_image
 from .styles import gooch, hatch, toon
@@ -254,7 +261,7 @@ class Explorer:
                 emap = self._layer(("emap", *ekey), lambda: edge_map(gb, **edges))
             else:
                 emap = self._layer(("fig7", *ekey), lambda: fig7_edge_map(gb, **edges))
-            rgb = _compose(shade, emap)
+            rgb = enhance(shade, emap)
         elif p.style == "lines":
             ink = self._layer(
                 ("lines", *ekey),
@@ -277,7 +284,7 @@ class Explorer:
                 lambda: _contour_ink(gb, p.contour_interval, p.contour_width),
             )
             rgb = rgb * (1.0 - ink) + _CONTOUR_COLOR * ink
-        return _to_uint8(rgb)
+        return to_uint8(rgb)
 
     def _capture(self) -> None:
         # supersample=1: the per-update filters must stay near 50 ms at 1024².
@@ -382,25 +389,6 @@ def _contour_ink(gb: GBuffer, interval: float, width: float) -> np.ndarray:
     """Contour-line ink of world z, (H, W, 1) at the output size."""
     ink = contour_lines(gb.world[..., 2], interval=interval, width=width, mask=gb.mask)
     return gb.downsample(ink)[..., None]
-
-
-def _compose(shade: np.ndarray, emap: np.ndarray) -> np.ndarray:
-    """:func:`~sciviz_gbuf.filters.enhance` with white inner edges and black profiles, in
-    float32 in place (numpy's float64 promotion made it ~35 ms at 1024x768)."""
-    inner = emap[..., 0:1]
-    alpha = emap[..., 3:4]
-    out = np.repeat(shade[..., None], 3, axis=2)
-    out += (np.float32(1.0) - out) * inner
-    out *= np.float32(1.0) - alpha
-    return out
-
-
-def _to_uint8(rgb: np.ndarray) -> np.ndarray:
-    """Float ``[0, 1]`` -> uint8 ``round(255 x)``, as :func:`~sciviz_gbuf.compose.to_uint8`."""
-    out = np.clip(rgb, 0.0, 1.0, dtype=np.float32)
-    out *= np.float32(255.0)
-    out += np.float32(0.5)
-    return out.astype(np.uint8)
 
 
 def style_image(

@@ -17,7 +17,7 @@ from ._block_mean import block_mean
 from .camera import CameraInfo
 from .errors import InputError
 
-__all__ = ["FORMAT_VERSION", "GBuffer"]
+__all__ = ["FORMAT_VERSION", "GBuffer", "check_gbuffer"]
 
 FORMAT_VERSION = 1
 _SCALAR_PREFIX = "scalars:"
@@ -265,3 +265,14 @@ class GBuffer:
             arrays[name] = a.reshape(h, w, *a.shape[1:])[::-1]
         meta = image.field_data[_META]
         return cls._from_arrays(arrays, str(meta[0]), source)
+
+
+def check_gbuffer(gb: object) -> GBuffer:
+    """``gb`` itself if it is a :class:`GBuffer`, else an :class:`InputError` naming it (the
+    input check of every function that works on a whole G-buffer)."""
+    if not isinstance(gb, GBuffer):
+        raise InputError(
+            f"gb: expected a sciviz_gbuf.GBuffer (from capture() or GBuffer.load()), "
+            f"got {type(gb).__name__}"
+        )
+    return gb

@@ -21,7 +21,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..errors import InputError
-from ..gbuffer import GBuffer
+from ..gbuffer import GBuffer, check_gbuffer
 from . import _reflection_kernels as _rk
 from .contours import contour_lines
 
@@ -39,12 +39,6 @@ def _unit(vector: Sequence[float], name: str) -> np.ndarray:
     if not (np.isfinite(v).all() and np.linalg.norm(v) > 0):
         raise InputError(f"{name}: expected a finite non-zero 3-vector, got {vector!r}")
     return v / np.linalg.norm(v)
-
-
-def _check_gbuffer(gb) -> GBuffer:
-    if not isinstance(gb, GBuffer):
-        raise InputError(f"gb: expected a GBuffer (sciviz_gbuf.capture), got {type(gb)!r}")
-    return gb
 
 
 def _axis_frame(axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -73,7 +67,7 @@ def reflection_angle(
     -------
     (H, W) float32 in (-pi, pi] at the buffer's size; NaN on the background.
     """
-    gb = _check_gbuffer(gb)
+    gb = check_gbuffer(gb)
     a = _unit(axis, "axis")
     if mode not in MODES:
         raise InputError(f"mode: expected one of {MODES}, got {mode!r}")
@@ -200,7 +194,7 @@ def reflection_lines(
     -------
     (H, W) float32 ink in [0, 1] at the output size; 0 on the background.
     """
-    gb = _check_gbuffer(gb)
+    gb = check_gbuffer(gb)
     a = _unit(axis, "axis")
     if mode not in MODES:
         raise InputError(f"mode: expected one of {MODES}, got {mode!r}")
@@ -248,7 +242,7 @@ def isophotes(
     -------
     (H, W) float32 ink in [0, 1] at the output size.
     """
-    gb = _check_gbuffer(gb)
+    gb = check_gbuffer(gb)
     lv = _unit(light, "light")
     if frame not in ("eye", "world"):
         raise InputError(f"frame: expected 'eye' or 'world', got {frame!r}")

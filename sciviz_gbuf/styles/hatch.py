@@ -30,7 +30,7 @@ import numpy as np
 from ..errors import InputError
 from ..filters import lambert, profile_edges
 from ..filters.operators import _positive
-from ..gbuffer import GBuffer
+from ..gbuffer import GBuffer, check_gbuffer
 from ..recipes.illustration import LIGHT
 
 __all__ = ["SPACES", "hatch", "stroke_ink", "tone_coverage"]
@@ -185,8 +185,7 @@ def hatch(
     InputError
         A bad parameter (named), or ``space="uv"`` without texture coordinates.
     """
-    if not isinstance(gb, GBuffer):
-        raise InputError(f"gb: expected a GBuffer, got {type(gb).__name__}")
+    check_gbuffer(gb)
     if space not in SPACES:
         raise InputError(f"space: expected one of {SPACES}, got {space!r}")
     k = gb.supersample

@@ -20,7 +20,7 @@ from scipy import ndimage
 from ..errors import InputError
 from ..filters import hatching, lambert, profile_edges
 from ..filters.operators import _positive
-from ..gbuffer import GBuffer
+from ..gbuffer import GBuffer, check_gbuffer
 from ..recipes.illustration import LIGHT
 
 __all__ = ["COMBOS", "TONE_FULL", "TONE_NONE", "line_drawing", "modulation", "photocopy"]
@@ -110,8 +110,7 @@ def line_drawing(
     -------
     (H, W) float32 grey in [0, 1] at ``gb.output_shape``; 1 is paper (also the background).
     """
-    if not isinstance(gb, GBuffer):
-        raise InputError(f"gb: expected a GBuffer, got {type(gb).__name__}")
+    check_gbuffer(gb)
     if combo not in COMBOS:
         raise InputError(f"combo: expected one of {sorted(COMBOS)}, got {combo!r}")
     sp = _positive(spacing, "spacing")

@@ -8,7 +8,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..errors import InputError
-from ..gbuffer import GBuffer
+from ..gbuffer import GBuffer, check_gbuffer
 
 __all__ = ["local_style"]
 
@@ -77,8 +77,7 @@ def local_style(
     -------
     (H, W, 3) float32.
     """
-    if not isinstance(gb, GBuffer):
-        raise InputError(f"gb: expected a sciviz_gbuf.GBuffer, got {type(gb).__name__}")
+    check_gbuffer(gb)
     if kind not in ("object", "cell"):
         raise InputError(f"kind: expected 'object' or 'cell', got {kind!r}")
     shape = gb.output_shape

@@ -20,22 +20,13 @@ import numpy as np
 from ..compose import _background as _rgb
 from ..errors import InputError
 from ..filters import edge_map, enhance
-from ..gbuffer import GBuffer
+from ..gbuffer import GBuffer, check_gbuffer
 from ..recipes.illustration import LIGHT
 
 __all__ = ["MAX_LEVELS", "gooch", "toon"]
 
 #: Largest shade texture :func:`toon` accepts (texels).
 MAX_LEVELS = 256
-
-
-def _check_gbuffer(gb: object) -> GBuffer:
-    if not isinstance(gb, GBuffer):
-        raise InputError(
-            f"gb: expected a sciviz_gbuf.GBuffer (from capture() or GBuffer.load()), "
-            f"got {type(gb).__name__}"
-        )
-    return gb
 
 
 def _unit_light(light: object) -> np.ndarray:
@@ -154,7 +145,7 @@ def gooch(
     -------
     (H, W, 3) float32 RGB in [0, 1] at ``gb.output_shape``.
     """
-    gb = _check_gbuffer(gb)
+    gb = check_gbuffer(gb)
     lv = _unit_light(light)
     base_c, warm_c, cool_c = _rgb(base, "base"), _rgb(warm, "warm"), _rgb(cool, "cool")
     a = np.float32(_unit_interval(alpha, "alpha"))
@@ -272,7 +263,7 @@ def toon(
     -------
     (H, W, 3) float32 RGB in [0, 1] at ``gb.output_shape``.
     """
-    gb = _check_gbuffer(gb)
+    gb = check_gbuffer(gb)
     lv = _unit_light(light)
     table = _shade_table(levels, _rgb(base, "base"))
     try:
