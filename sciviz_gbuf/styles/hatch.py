@@ -109,20 +109,62 @@ def _robust_gradient(f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     taking the smaller one keeps the surface's own gradient there.
     """
 
+    f = np.asarray(f, dtype=np.float32)
+
     def along(axis: int) -> np.ndarray:
+        def cut(lo, hi):  # slice lo:hi along `axis`
+            return (slice(None), slice(lo, hi)) if axis == 1 else (slice(lo, hi), slice(None))
+
+        out = np.zeros_like(f)
+        if f.shape[axis] < 2:
+            return out
         diff = np.diff(f, axis=axis)
-        pad_lo = [(0, 0), (0, 0)]
-        pad_hi = [(0, 0), (0, 0)]
-        pad_lo[axis] = (1, 0)
-        pad_hi[axis] = (0, 1)
-        back = np.pad(diff, pad_lo, constant_values=np.nan)
-        fwd = np.pad(diff, pad_hi, constant_values=np.nan)
-        pick = np.where(np.abs(fwd) <= np.abs(back), fwd, back)
-        pick = np.where(np.isnan(fwd), back, np.where(np.isnan(back), fwd, pick))
-        return np.nan_to_num(pick, nan=0.0)
+        # First and last pixel: the only one-sided difference there is.
+        out[cut(0, 1)] = diff[cut(0, 1)]
+        out[cut(-1, None)] = diff[cut(-1, None)]
+        fwd, back = diff[cut(1, None)], diff[cut(None, -1)]
+        # The smaller of the two; a NaN side loses (a NaN forward one fails the comparison).
+        take_fwd = np.abs(fwd) <= np.abs(back)
+        take_fwd |= np.isnan(back)
+        out[cut(1, -1)] = np.where(take_fwd, fwd, back)
+        return np.nan_to_num(out, copy=False, nan=0.0)
 
     # rows run downwards: y up is minus the row derivative
-    return along(1).astype(np.float32), (-along(0)).astype(np.float32)
+    dy = along(0)
+    np.negative(dy, out=dy)
+    return along(1), dy
+
+
+def _tone(normal: np.ndarray, light: object, mask: np.ndarray) -> np.ndarray:
+    """``1 - lambert(normal, light, mask)`` with NaN and the background at 0, as (H, W) float32
+    (in place on the shade, no further full-size array)."""
+    shade = lambert(normal, light=light, mask=mask)
+    np.nan_to_num(shade, copy=False, nan=1.0)
+    return np.subtract(np.float32(1.0), shade, out=shade)
+
+
+def _family_coverage(tone: np.ndarray, f: int, n: int) -> np.ndarray:
+    """Coverage of family ``f`` of ``n`` where it inks (``tone > f / n``): one family of
+    :func:`tone_coverage`, with the same float32 steps."""
+    lo = np.arange(n, dtype=np.float32)[f] / np.float32(n)
+    top = np.minimum(tone, lo + np.float32(1.0 / n))
+    cover = np.clip((top - lo) / (np.float32(1.0) - lo), 0.0, 1.0)
+    return cover.astype(np.float32, copy=False)
+
+
+def _uv_stroke(u, v, ux, uy, vx, vy, a: float, scale: float) -> tuple[np.ndarray, np.ndarray]:
+    """Stroke coordinate and local stroke period (pixels) of the uv family at angle ``a``."""
+    # Whole numbers of strokes per unit of u and of v: a closed parameterisation (a torus, a
+    # surface of revolution) wraps from 1 to 0 without a seam in the strokes.
+    nv, nu = np.round(scale * np.cos(a)), np.round(scale * np.sin(a))
+    if nu == 0 and nv == 0:
+        nv = 1.0
+    ca, sa = np.float32(nv), np.float32(nu)
+    c = np.nan_to_num(v * ca - u * sa, nan=0.0)
+    grad = np.hypot(vx * ca - ux * sa, vy * ca - uy * sa)
+    # local stroke period in pixels; where it cannot be measured, no stroke
+    period = np.where(grad > 0, 1.0 / np.maximum(grad, 1e-30), 0.0).astype(np.float32)
+    return c, period
 
 
 def hatch(
@@ -203,16 +245,27 @@ def hatch(
         raise InputError("space: 'uv' needs texture coordinates, but gb.uv is None")
 
     mask = np.asarray(gb.mask, dtype=bool)
-    shade = lambert(gb.normal, light=light, mask=mask)
-    tone = np.where(mask, np.float32(1.0) - np.nan_to_num(shade, nan=1.0), np.float32(0.0))
-    cover = tone_coverage(tone, theta.size)
-
+    tone = _tone(gb.normal, light, mask)
     h, w = gb.shape
+    # Only pixels with some tone can take ink (family f inks where tone > f / N): the strokes
+    # are evaluated on those alone, as flat arrays, and the families on shrinking subsets.
+    at = np.flatnonzero(tone.reshape(-1) > 0)
+    t_at = tone.reshape(-1)[at]
+    # Family f inks where tone > f / N, so pixels sorted by the number of families inking them
+    # make each family's pixels a prefix: slices instead of gathers in the loop below.
+    lows = np.arange(theta.size, dtype=np.float32) / np.float32(theta.size)
+    n_inking = np.ones(t_at.size, dtype=np.uint8)  # all of them have tone > 0
+    for lo in lows[1:]:
+        n_inking += t_at > lo
+    order = np.argsort(np.uint8(theta.size) - n_inking, kind="stable")
+    prefix = np.cumsum(np.bincount(n_inking, minlength=theta.size + 1)[::-1])[::-1]
+    at, t_at = at[order], t_at[order]
     if space == "screen":
+        rows = at // w  # divmod would take several times as long
+        cols = at - rows * w
         # x right, y up, in buffer pixels, from the pixel centres
-        y, x = np.mgrid[h - 1 : -1 : -1, 0:w].astype(np.float32)
-        coords = [(-x * np.sin(a) + y * np.cos(a)) / sp for a in theta]
-        periods = [np.full((h, w), sp, dtype=np.float32)] * theta.size
+        x = np.arange(w, dtype=np.float32)
+        y = np.arange(h - 1, -1, -1, dtype=np.float32)
     else:
         u = np.where(mask, gb.uv[..., 0], np.nan).astype(np.float32)
         v = np.where(mask, gb.uv[..., 1], np.nan).astype(np.float32)
@@ -224,33 +277,43 @@ def hatch(
             if g.size == 0:
                 raise InputError("gb: the texture coordinates do not vary over the surface")
             scale = 1.0 / (sp * float(np.median(g)))
-        coords, periods = [], []
-        for a in theta:
-            # Whole numbers of strokes per unit of u and of v: a closed parameterisation (a
-            # torus, a surface of revolution) wraps from 1 to 0 without a seam in the strokes.
-            nv, nu = np.round(scale * np.cos(a)), np.round(scale * np.sin(a))
-            if nu == 0 and nv == 0:
-                nv = 1.0
-            ca, sa = np.float32(nv), np.float32(nu)
-            c = v * ca - u * sa
-            grad = np.hypot(vx * ca - ux * sa, vy * ca - uy * sa)
-            coords.append(np.nan_to_num(c, nan=0.0))
-            # local stroke period in pixels; where it cannot be measured, no stroke
-            periods.append(np.where(grad > 0, 1.0 / np.maximum(grad, 1e-30), 0.0))
+        uv_at = [a.reshape(-1)[at] for a in (u, v, ux, uy, vx, vy)]
 
-    paper_left = np.ones((h, w), dtype=np.float32)
-    for f in range(theta.size):
-        c, period = coords[f], periods[f].astype(np.float32)
-        distance = (c - np.round(c)) * period  # to the nearest stroke centre, in pixels
-        width = cover[f] * period  # coverage c_f of a family `period` px apart
+    paper_left = np.ones(at.size, dtype=np.float32)
+    for f, a in enumerate(theta):
+        m = int(prefix[f + 1])  # pixels where family f inks
+        if m == 0:
+            break
+        cover = _family_coverage(t_at[:m], f, theta.size)
+        if space == "screen":
+            # float64, as the stroke coordinate is far from 0 across a large image
+            along = (-x * np.sin(a))[cols[:m]]
+            along += (y * np.cos(a))[rows[:m]]
+            along /= sp
+            period = np.float32(sp)
+        else:
+            along, period = _uv_stroke(*(c[:m] for c in uv_at), a, scale)
+        distance = (along - np.round(along)) * period  # to the nearest stroke centre, in pixels
+        width = cover * period  # coverage c_f of a family `period` px apart
         if cap_w is not None:
             width = np.minimum(width, np.float32(cap_w) * (period / np.float32(sp)))
         # families at different angles overlap independently: the union keeps 1 - prod(1 - c)
-        paper_left *= np.float32(1.0) - stroke_ink(distance, width)
-    strokes = np.where(mask, np.float32(1.0) - paper_left, np.float32(0.0))
-    amount = np.clip(gb.downsample(strokes), 0.0, 1.0)
-    rgb = paper_c + (ink_c - paper_c) * amount[..., None]
+        paper_left[:m] *= np.float32(1.0) - stroke_ink(distance, width)
+    strokes = np.zeros(h * w, dtype=np.float32)
+    strokes[at] = np.float32(1.0) - paper_left
+    strokes = strokes.reshape(h, w)
+    amount = strokes if k == 1 else gb.downsample(strokes)
+    np.clip(amount, 0.0, 1.0, out=amount)
+    keep = None
     if edges:
         # profiles are black whatever the ink colour (2003 edge enhancement: A channel)
-        rgb = rgb * (np.float32(1.0) - profile_edges(gb, width=pw))[..., None]
-    return np.clip(rgb, 0.0, 1.0).astype(np.float32, copy=False)
+        keep = np.float32(1.0) - profile_edges(gb, width=pw)
+    rgb = np.empty((*amount.shape, 3), dtype=np.float32)
+    plane = np.empty_like(amount)
+    for c in range(3):  # contiguous planes: an innermost axis of 3 makes numpy slow
+        np.multiply(amount, ink_c[c] - paper_c[c], out=plane)
+        plane += paper_c[c]
+        if keep is not None:
+            plane *= keep
+        rgb[..., c] = plane
+    return np.clip(rgb, 0.0, 1.0, out=rgb)

@@ -13,7 +13,7 @@ Both shade at the buffer size from the eye-space normals and reduce to the outpu
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 
 import numpy as np
 
@@ -56,16 +56,35 @@ def _check_bool(value: object, name: str) -> bool:
 
 
 def _n_dot_l(gb: GBuffer, light: np.ndarray) -> np.ndarray:
-    """``N.L`` at buffer size, 0 where there is no surface (those pixels are replaced later)."""
-    n = np.nan_to_num(np.asarray(gb.normal, dtype=np.float32), nan=0.0)
-    return np.clip(n @ light, -1.0, 1.0).astype(np.float32, copy=False)
+    """``N.L`` at buffer size; 0 on background normals (the caller paints those pixels)."""
+    n = np.asarray(gb.normal, dtype=np.float32)
+    # Taken on the raw normals: cleaning the NaN of the background first would copy the whole
+    # (H, W, 3) buffer. Surface pixels with a NaN component are redone on cleaned normals.
+    ndl = np.asarray(n @ light, dtype=np.float32)
+    bad = np.isnan(ndl)
+    np.copyto(ndl, np.float32(0.0), where=bad)
+    bad &= np.asarray(gb.mask, dtype=bool)
+    if bad.any():
+        ndl[bad] = np.nan_to_num(n[bad], nan=0.0) @ light
+    return np.clip(ndl, -1.0, 1.0, out=ndl)
 
 
-def _finish(gb: GBuffer, colour: np.ndarray, background: np.ndarray) -> np.ndarray:
-    """Paper outside the mask, then the box filter to output size: silhouettes blend with the
-    background by coverage."""
-    rgb = np.where(gb.mask[..., None], colour, background[None, None, :]).astype(np.float32)
-    return np.clip(gb.downsample(rgb), 0.0, 1.0).astype(np.float32, copy=False)
+def _finish(gb: GBuffer, rgb: np.ndarray) -> np.ndarray:
+    """The box filter to output size of the (H, W, 3) float32 colour, paper already outside
+    the mask, so silhouettes blend with the background by coverage. ``rgb`` may be reused."""
+    out = rgb if gb.supersample == 1 else gb.downsample(rgb)
+    return np.clip(out, 0.0, 1.0, out=out)
+
+
+def _finish_planes(gb: GBuffer, planes: Iterator[np.ndarray]) -> np.ndarray:
+    """:func:`_finish` of the R, G, B planes, filtered one by one as they come (they may share
+    a buffer): the filter is per channel, so this gives the means of the interleaved image
+    without building it at buffer size."""
+    ss = gb.supersample > 1
+    out = np.empty((*(gb.output_shape if ss else gb.shape), 3), dtype=np.float32)
+    for c, plane in enumerate(planes):
+        out[..., c] = gb.downsample(plane) if ss else plane
+    return np.clip(out, 0.0, 1.0, out=out)
 
 
 def _edges(
@@ -87,6 +106,35 @@ def _edges(
         emap[..., :3] = 0.0
         inner_color = np.ones(3, dtype=np.float32)
     return enhance(rgb, emap, inner_color=inner_color, profile_color=profile_color)
+
+
+def _gooch_planes(
+    gb: GBuffer, lv: np.ndarray, k_warm: np.ndarray, k_cool: np.ndarray, bg: np.ndarray
+) -> Iterator[np.ndarray]:
+    """The colour ``clip(t k_warm + (1 - t) k_cool)`` channel by channel, paper off the mask.
+
+    Per channel plane the operations are those of the (H, W, 1) x (3,) broadcast, in the same
+    order and precision (so the result is the same to the bit), but each runs over contiguous
+    memory instead of innermost loops three long.
+    """
+    t = _n_dot_l(gb, lv)
+    t += np.float32(1.0)
+    t *= np.float32(0.5)
+    one_minus_t = np.float32(1.0) - t
+    paper = ~np.asarray(gb.mask, dtype=bool)
+    # With t in [0, 1] and both tones in [0, 1 - 2**-20] the float32 blend cannot leave
+    # [0, 1] (three roundings add at most 3 * 2**-24), so the clip would change nothing.
+    clip = max(float(k_warm.max()), float(k_cool.max())) > 1.0 - 2.0**-20
+    plane = np.empty_like(t)
+    tmp = np.empty_like(t)
+    for c in range(3):
+        np.multiply(t, k_warm[c], out=plane)
+        np.multiply(one_minus_t, k_cool[c], out=tmp)
+        plane += tmp
+        if clip:
+            np.clip(plane, 0.0, 1.0, out=plane)
+        np.copyto(plane, bg[c], where=paper)
+        yield plane
 
 
 def gooch(
@@ -156,9 +204,7 @@ def gooch(
 
     k_cool = cool_c + a * base_c
     k_warm = warm_c + b * base_c
-    t = ((1.0 + _n_dot_l(gb, lv)) * 0.5)[..., None]
-    colour = np.clip(t * k_warm + (1.0 - t) * k_cool, 0.0, 1.0)
-    rgb = _finish(gb, colour, bg)
+    rgb = _finish_planes(gb, _gooch_planes(gb, lv, k_warm, k_cool, bg))
     if not edges:
         return rgb
     return _edges(
@@ -203,6 +249,73 @@ def _shade_table(levels: object, base: np.ndarray) -> np.ndarray:
 def _smoothstep(x: np.ndarray) -> np.ndarray:
     x = np.clip(x, 0.0, 1.0)
     return x * x * (3.0 - 2.0 * x)
+
+
+def _toon_colour(
+    gb: GBuffer, lv: np.ndarray, table: np.ndarray, sm: float, bg: np.ndarray
+) -> np.ndarray:
+    """The toon colour at buffer size, paper off the mask (see :func:`toon`).
+
+    The paper is one more texel, looked up where there is no surface, so a single gather of
+    whole texels makes the image. The texels are in [0, 1] already (``_shade_table``), so only
+    pixels on a smoothed transition need the clip.
+    """
+    n = table.shape[0]
+    s = np.maximum(_n_dot_l(gb, lv), np.float32(0.0))
+    idx = (s * np.float32(n)).astype(np.intp)
+    np.minimum(idx, n - 1, out=idx)
+    mask = np.asarray(gb.mask, dtype=bool)
+    ramps = None if sm == 0.0 or n == 1 else _toon_ramps(s, idx, mask, table, sm)
+    np.copyto(idx, n, where=~mask)
+    colour = np.take(np.vstack([table, bg[None, :]]), idx, axis=0)
+    if ramps is not None:
+        at, fixed = ramps
+        colour.reshape(-1, 3)[at] = fixed
+    return colour
+
+
+def _toon_ramps(
+    s: np.ndarray, idx: np.ndarray, mask: np.ndarray, table: np.ndarray, sm: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Flat indices of the surface pixels on a smoothed transition, and their clipped colours.
+
+    The sum over thresholds ``j`` of ``d_j (smoothstep - step)`` where ``|s - j / n| < sm / 2``
+    is taken in increasing ``j``, in float32, as a loop over all thresholds on the whole image
+    would, but only on pixels near a threshold and only over the thresholds near each: a pixel
+    sees those within ``sm / 2 * n`` texels of its nearest one.
+    """
+    n = table.shape[0]
+    half = np.float32(0.5 * sm)
+    taus = np.array([np.float32(j / n) for j in range(n)], dtype=np.float32)
+    lows = taus - half  # the ramp's start, as ``tau - half`` per threshold
+    steps = table[1:] - table[:-1]  # d_j = table[j] - table[j - 1] at steps[j - 1]
+    # Candidates: the nearest threshold closer than sm / 2, with a margin far above float32
+    # round-off, so that no pixel the exact test below accepts is left out.
+    near_j = np.clip(np.rint(s * np.float32(n)), 1, n - 1)
+    near_j *= np.float32(1.0 / n)
+    near_j -= s
+    cand = np.abs(near_j, out=near_j) < half + np.float32(1e-4)
+    cand &= mask
+    at = np.flatnonzero(cand)
+    sc = s.reshape(-1)[at]
+    ic = idx.reshape(-1)[at]
+    colour = table[ic]
+    centre = np.clip(np.rint(sc * np.float32(n)).astype(np.intp), 1, n - 1)
+    reach = min(int(np.ceil(float(half) * n)) + 1, n)
+    for o in range(-reach, reach + 1):  # increasing j for every pixel
+        j = centre + o
+        ok = (j >= 1) & (j <= n - 1)
+        jj = np.where(ok, j, 1)
+        ok &= np.abs(sc - taus[jj]) < half
+        sel = np.flatnonzero(ok)
+        if sel.size == 0:
+            continue
+        js = jj[sel]
+        # the step is taken from the lookup itself, so both agree exactly at the threshold
+        ramp = _smoothstep((sc[sel] - lows[js]) / np.float32(sm)) - (ic[sel] >= js)
+        colour[sel] += ramp[:, None].astype(np.float32) * steps[js - 1]
+    np.clip(colour, 0.0, 1.0, out=colour)
+    return at, colour
 
 
 def toon(
@@ -277,24 +390,7 @@ def toon(
     bg = _rgb(background, "background")
     edges = _check_bool(edges, "edges")
 
-    n = table.shape[0]
-    s = np.maximum(_n_dot_l(gb, lv), np.float32(0.0))
-    idx = np.minimum((s * np.float32(n)).astype(np.intp), n - 1)
-    colour = table[idx]
-    if sm > 0.0 and n > 1:
-        # Correct the nearest lookup only inside the ramps, so that outside them the colours
-        # stay exactly the texels: add d_j (smoothstep - step) for each threshold j / n.
-        half = np.float32(0.5 * sm)
-        for j in range(1, n):  # a loop over texels, each step vectorised over the image
-            tau = np.float32(j / n)
-            near = np.abs(s - tau) < half
-            if not near.any():
-                continue
-            # the step is taken from the lookup itself, so both agree exactly at the threshold
-            ramp = _smoothstep((s[near] - (tau - half)) / np.float32(sm)) - (idx[near] >= j)
-            colour[near] += ramp[:, None].astype(np.float32) * (table[j] - table[j - 1])
-        colour = np.clip(colour, 0.0, 1.0)
-    rgb = _finish(gb, colour, bg)
+    rgb = _finish(gb, _toon_colour(gb, lv, table, sm, bg))
     if not edges:
         return rgb
     return _edges(
