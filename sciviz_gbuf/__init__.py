@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from .camera import CameraInfo
 from .capture import capture
+from .cog import local_client, write_cog
 from .errors import InputError, RenderError, SciVizGBufError
 from .gbuffer import GBuffer
 from .recipes.birdseye import birdseye_map, sumi_e
@@ -28,9 +29,11 @@ __all__ = [
     "birdseye_map",
     "capture",
     "ct_enhance",
+    "local_client",
     "sumi_e",
     "surface_analysis",
     "topographic_map",
+    "write_cog",
 ]
 
 # Register PyVista's ``.gbuf`` dataset accessor and plotter component (also declared as entry

@@ -196,48 +196,155 @@ def _contour_options(spec) -> dict:
     return {"interval": spec[0], "major_interval": spec[1]}
 
 
-def _cmd_topo(args: argparse.Namespace) -> int:
-    from ._progress import progress
-    from .compose import write_geotiff, write_png
-    from .recipes.terrain import topographic_map
+def _chunks_arg(text: str) -> tuple[int, int]:
+    """``--chunks``: ``N`` (square) or ``ROWS,COLS`` positive integers."""
+    try:
+        vals = [int(v) for v in text.split(",")]
+    except ValueError:
+        vals = []
+    if len(vals) not in (1, 2) or min(vals) < 1:
+        raise argparse.ArgumentTypeError(
+            f"expected a chunk size N or ROWS,COLS of positive integers such as 2048, got {text!r}"
+        )
+    return (vals[0], vals[0]) if len(vals) == 1 else (vals[0], vals[1])
 
-    out = _png_output(args.output)
+
+def _topo_options(args: argparse.Namespace, show: bool) -> dict:
+    return {
+        **_contour_options(args.contours),
+        "width": args.width,
+        "major_width": args.major_width,
+        "bands": args.bands,
+        "cmap": args.cmap,
+        "sea_level": args.sea_level,
+        "relief": not args.no_relief,
+        "azimuth": args.azimuth,
+        "altitude": args.altitude,
+        "z_factor": args.z_factor,
+        "variant": args.variant,
+        "shadows": args.shadows,
+        "sky_view": args.sky_view,
+        "progress_bar": show,
+    }
+
+
+def _topo_paths(args: argparse.Namespace) -> tuple[Path, bool]:
+    """Checked ``--output`` (and ``--geotiff``, ``--overview``, cluster options); True for a
+    .tif output."""
+    out = Path(args.output)
+    suffix = out.suffix.lower()
+    lazy = args.chunks is not None or args.dask is not None
+    if suffix not in (".png", ".tif", ".tiff"):
+        raise InputError(
+            f"--output: expected a file name ending in .png or .tif, got {args.output!r}"
+        )
+    if not out.parent.is_dir():
+        raise InputError(f"--output: no such directory {str(out.parent)!r}")
+    tif = suffix != ".png"
+    if lazy and not tif:
+        raise InputError(
+            f"--output: out of core (--chunks/--dask) the map is written as a Cloud-Optimised "
+            f"GeoTIFF: expected a .tif file, got {args.output!r} (add --overview FILE.png for "
+            "a PNG preview)"
+        )
+    if args.overview is not None and not tif:
+        raise InputError("--overview: a PNG preview comes from a .tif output: use -o FILE.tif")
     if args.geotiff is not None:
-        tif = Path(args.geotiff)
-        if tif.suffix.lower() not in (".tif", ".tiff") or not tif.parent.is_dir():
+        if tif:
+            raise InputError("--geotiff: the output is already a GeoTIFF: use -o FILE.tif alone")
+        g = Path(args.geotiff)
+        if g.suffix.lower() not in (".tif", ".tiff") or not g.parent.is_dir():
             raise InputError(
                 f"--geotiff: expected a .tif/.tiff file in an existing folder, got {args.geotiff!r}"
             )
+    cluster_options = args.workers is not None or args.memory_limit is not None
+    if cluster_options and args.dask != "local":
+        raise InputError(
+            "--workers/--memory-limit: only for a new local cluster (--dask without an address)"
+        )
+    return out, tif
+
+
+def _cmd_topo(args: argparse.Namespace) -> int:
+    from ._progress import progress
+    from .cog import write_cog
+    from .compose import write_geotiff, write_png
+    from .recipes.terrain import topographic_map
+
+    out, tif = _topo_paths(args)
+    source = None if not args.dem else args.dem[0] if len(args.dem) == 1 else list(args.dem)
     t0 = time.perf_counter()
     show = _show_progress(args)
+    if args.chunks is not None or args.dask is not None:
+        return _topo_out_of_core(args, source, out, show, t0)
     with progress(show, 2 + (args.geotiff is not None), "topo") as bar:
-        dem = _read_terrain(args.dem)
+        dem = _read_terrain(source)
         bar.step("map")
-        rgba = topographic_map(
-            dem,
-            **_contour_options(args.contours),
-            width=args.width,
-            major_width=args.major_width,
-            bands=args.bands,
-            cmap=args.cmap,
-            sea_level=args.sea_level,
-            relief=not args.no_relief,
-            azimuth=args.azimuth,
-            altitude=args.altitude,
-            z_factor=args.z_factor,
-            variant=args.variant,
-            shadows=args.shadows,
-            sky_view=args.sky_view,
-            progress_bar=show,
-        )
+        rgba = topographic_map(dem, **_topo_options(args, show))
         bar.step("write")
-        write_png(out, rgba)
+        if tif:
+            write_cog(
+                rgba, out, dem=dem, overview_png=args.overview, overview_size=args.overview_size
+            )
+        else:
+            write_png(out, rgba)
         if args.geotiff is not None:
             write_geotiff(args.geotiff, rgba, dem=dem)
             bar.step("geotiff")
     h, w = dem.shape
-    extra = f" and {args.geotiff}" if args.geotiff else ""
+    extra = "".join(f" and {f}" for f in (args.geotiff, args.overview) if f)
     print(f"wrote {out}{extra} ({w}x{h}) in {time.perf_counter() - t0:.1f} s")
+    return 0
+
+
+def _topo_out_of_core(args: argparse.Namespace, source, out: Path, show: bool, t0: float) -> int:
+    """``--chunks``/``--dask``: lazy DEM -> lazy map -> COG written block by block."""
+    from .cog import local_client, write_cog
+    from .readers import read_dem
+    from .recipes.terrain import topographic_map
+
+    if source is None:
+        raise InputError("dem: out of core (--chunks/--dask) needs DEM file(s) to read")
+    # Read (metadata only) before a cluster starts: a bad file fails fast.
+    dem = read_dem(source, chunks=args.chunks or 2048)
+    client = None
+    if args.dask == "local":
+        client = local_client(args.workers or 2, memory_limit=args.memory_limit or "3GB")
+    elif args.dask is not None:
+        from distributed import Client
+
+        try:
+            client = Client(args.dask, timeout="10s")
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise InputError(
+                f"--dask: cannot connect to a dask scheduler at {args.dask!r} ({exc})"
+            ) from exc
+    try:
+        # While open, the Client is dask's default scheduler: the map's whole-grid reductions
+        # (colour range, contour interval) run on the cluster too.
+        rgba = topographic_map(dem, **_topo_options(args, show))
+        write_cog(
+            rgba,
+            out,
+            dem=dem,
+            overview_png=args.overview,
+            overview_size=args.overview_size,
+            client=client,
+            progress_bar=show,
+        )
+    finally:
+        if client is not None:
+            cluster = client.cluster if args.dask == "local" else None
+            client.close()
+            if cluster is not None:
+                cluster.close()
+    h, w = dem.shape
+    where = "local threads" if client is None else f"dask cluster {args.dask}"
+    extra = f" and {args.overview}" if args.overview else ""
+    print(
+        f"wrote {out}{extra} ({w}x{h}, chunks {dem.heights.chunksize}, {where}) "
+        f"in {time.perf_counter() - t0:.1f} s"
+    )
     return 0
 
 
@@ -302,15 +409,28 @@ def _add_progress(p: argparse.ArgumentParser) -> None:
     )
 
 
-def _add_map_style(p: argparse.ArgumentParser) -> None:
-    """Options shared by the plan-view and bird's-eye maps."""
+def _add_map_style(p: argparse.ArgumentParser, *, tiles: bool = False) -> None:
+    """Options shared by the plan-view and bird's-eye maps; ``tiles``: several DEM files (one
+    mosaic) and a .png or .tif output."""
     p.add_argument(
         "dem",
-        nargs="?",
+        nargs="*" if tiles else "?",
         help="DEM file: GeoTIFF, .asc, .hgt, USGS .dem, .npy/.npz (default: the bundled "
-        "Jacksboro fault DEM from Matplotlib's sample data)",
+        "Jacksboro fault DEM from Matplotlib's sample data)"
+        + (
+            "; several files (e.g. SRTM tiles of one CRS and resolution) make one mosaic"
+            if tiles
+            else ""
+        ),
     )
-    p.add_argument("-o", "--output", required=True, help="output image (.png)")
+    p.add_argument(
+        "-o",
+        "--output",
+        required=True,
+        help="output image (.png, or .tif for a Cloud-Optimised GeoTIFF)"
+        if tiles
+        else "output image (.png)",
+    )
     p.add_argument(
         "--contours",
         type=_contours,
@@ -353,9 +473,11 @@ def _add_topo(sub) -> None:
         "topo",
         help="plan-view topographic map of a DEM: bands, relief, contours (PNG, GeoTIFF)",
         description="Colour bands, GDAL-compatible relief and major/minor contour lines of a "
-        "DEM on its own grid (Saito & Takahashi 1990, Fig. 11). Nodata is transparent.",
+        "DEM on its own grid (Saito & Takahashi 1990, Fig. 11). Nodata is transparent. "
+        "With --chunks or --dask the DEM is read, mapped and written chunk by chunk (out of "
+        "core, any size): the output must be a .tif (a Cloud-Optimised GeoTIFF).",
     )
-    _add_map_style(p)
+    _add_map_style(p, tiles=True)
     p.add_argument(
         "--geotiff",
         default=None,
@@ -390,6 +512,49 @@ def _add_topo(sub) -> None:
     p.add_argument("--shadows", action="store_true", help="darken cast shadows")
     p.add_argument(
         "--sky-view", action="store_true", help="darken cells that see less sky (slow: ~1 MPix/s)"
+    )
+    p.add_argument(
+        "--chunks",
+        type=_chunks_arg,
+        default=None,
+        metavar="N|ROWS,COLS",
+        help="out of core: read, map and write the DEM in chunks of this many cells "
+        "(e.g. 2048; default 2048 with --dask); needs a .tif output",
+    )
+    p.add_argument(
+        "--dask",
+        nargs="?",
+        const="local",
+        default=None,
+        metavar="ADDRESS",
+        help="out of core on dask.distributed: a new local cluster (no ADDRESS), or the "
+        "scheduler at ADDRESS (tcp://host:8786)",
+    )
+    p.add_argument(
+        "--workers",
+        type=_positive_int,
+        default=None,
+        help="worker processes of the local --dask cluster (default 2; each gets "
+        "NUMBA_NUM_THREADS = cores // workers)",
+    )
+    p.add_argument(
+        "--memory-limit",
+        default=None,
+        metavar="SIZE",
+        help="memory limit per worker of the local --dask cluster (default 3GB)",
+    )
+    p.add_argument(
+        "--overview",
+        default=None,
+        metavar="FILE.png",
+        help="with a .tif output: also a PNG preview read from its overviews",
+    )
+    p.add_argument(
+        "--overview-size",
+        type=_positive_int,
+        default=2048,
+        metavar="PX",
+        help="long side of the --overview PNG in pixels (default 2048)",
     )
     _add_progress(p)
     p.set_defaults(func=_cmd_topo)

@@ -13,6 +13,7 @@ __all__ = [
     "load_jacksboro_terrain",
     "load_nut",
     "metres_per_degree",
+    "synthetic_dem",
 ]
 
 
@@ -156,3 +157,82 @@ def load_frog_skeleton(*, sigma: float = 1.0) -> pv.ImageData:
     )
     out.point_data["skeleton"] = occupancy.reshape(-1)
     return out
+
+
+def synthetic_dem(shape: tuple[int, int], *, chunks: int | tuple[int, int] = 2048, seed: int = 0):
+    """A lazy synthetic DEM of any size, generated chunk by chunk and never held whole.
+
+    Ridges and valleys of eight octaves of rotated sine waves (wavelengths 40 cells to 5000
+    cells, amplitude falling as the wavelength) plus a little per-cell noise, about 0 to 3000
+    m, on 30 m cells. Each cell is a function of its global row and column only, so the heights
+    do not depend on the chunking (``synthetic_dem(s, chunks=a).compute()`` equals it with
+    ``chunks=b``) and ``numpy.asarray`` of a small one gives the in-memory reference of a large
+    one's corner.
+
+    Parameters
+    ----------
+    shape : (int, int)
+        Rows, columns (each >= 1).
+    chunks : int or (int, int), default: 2048
+    seed : int, default: 0
+        Phases and directions of the waves.
+
+    Returns
+    -------
+    sciviz_gbuf.readers.DEM
+        Heights a float32 dask array; 30 m pixels, projected (no CRS), north-up transform with
+        the origin at (0, 0).
+    """
+    import dask.array as da
+
+    from .readers import DEM
+
+    try:
+        rows, cols = (int(v) for v in shape)
+    except (TypeError, ValueError):
+        rows = cols = 0
+    if rows < 1 or cols < 1:
+        raise InputError(f"shape: expected two integers >= 1 (rows, columns), got {shape!r}")
+    rng = np.random.default_rng(seed)
+    octaves = 8
+    wavelengths = np.geomspace(5000.0, 40.0, octaves)
+    angles = rng.uniform(0.0, np.pi, (octaves, 2))
+    phases = rng.uniform(0.0, 2 * np.pi, (octaves, 2))
+    amps = 600.0 * (wavelengths / wavelengths[0]) ** 0.8
+
+    def block(block_info=None) -> np.ndarray:
+        (r0, r1), (c0, c1) = block_info[None]["array-location"]
+        r = np.arange(r0, r1, dtype=np.float64)
+        c = np.arange(c0, c1, dtype=np.float64)
+        z = np.full((r1 - r0, c1 - c0), 1500.0, dtype=np.float32)
+        for k in range(octaves):
+            # sin(f u + p) cos(g v + q), u and v linear in (c, r), expanded into rank-1 terms
+            # of row and column vectors: a few full-size multiply-adds per octave
+            f = 2 * np.pi / wavelengths[k]
+            (a0, b0), (a1, b1) = np.cos(angles[k]), np.sin(angles[k])
+            su_c, cu_c = np.sin(f * a0 * c + phases[k, 0]), np.cos(f * a0 * c + phases[k, 0])
+            su_r, cu_r = np.sin(f * a1 * r), np.cos(f * a1 * r)
+            sv_c, cv_c = (
+                np.sin(0.7 * f * b0 * c + phases[k, 1]),
+                np.cos(0.7 * f * b0 * c + phases[k, 1]),
+            )
+            sv_r, cv_r = np.sin(0.7 * f * b1 * r), np.cos(0.7 * f * b1 * r)
+            # sin(U_c + U_r) = su_c cu_r + cu_c su_r; cos(V_c + V_r) = cv_c cv_r - sv_c sv_r
+            for col_u, row_u in ((su_c, cu_r), (cu_c, su_r)):
+                for col_v, row_v, sign in ((cv_c, cv_r, 1.0), (sv_c, sv_r, -1.0)):
+                    rows_ = (amps[k] * sign * row_u * row_v).astype(np.float32)
+                    z += rows_[:, None] * (col_u * col_v).astype(np.float32)[None, :]
+        # per-cell noise from a hash of the global index (no state shared between chunks)
+        h = (r.astype(np.uint64)[:, None] * np.uint64(73856093)) ^ (
+            c.astype(np.uint64)[None, :] * np.uint64(19349663)
+        )
+        h = (h * np.uint64(2654435761)) % np.uint64(1 << 31)
+        z += (h * (2.0 / float(1 << 31)) - 1.0).astype(np.float32)
+        return z
+
+    heights = da.map_blocks(
+        block, chunks=da.core.normalize_chunks(chunks, (rows, cols)), dtype=np.float32,
+        meta=np.empty((0, 0), np.float32),
+    )  # fmt: skip
+    transform = (0.0, 30.0, 0.0, 30.0 * rows, 0.0, -30.0)
+    return DEM(heights, da.isfinite(heights), None, transform, (30.0, 30.0), False, "synthetic")

@@ -8,6 +8,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from .. import _chunks
 from ..compose import _colormap_of
 from ..errors import InputError
 from . import _band_kernels as _bk
@@ -163,6 +164,10 @@ def color_bands(
     -------
     (H, W, 4) float32 RGBA in [0, 1]: alpha 1 on data, 0 (and black) at nodata.
     """
+    if _chunks.any_dask(heights, mask):
+        return _chunked_bands(heights, mask, vmin, vmax, **{
+            "interval": interval, "levels": levels, "base": base, "cmap": cmap,
+            "sea_level": sea_level, "sea_cmap": sea_cmap})  # fmt: skip
     v = _image(heights, "heights")
     m = _mask(mask, v.shape)
     valid = np.isfinite(v) if m is None else np.isfinite(v) & m
@@ -184,3 +189,37 @@ def color_bands(
         return out
     _bk.band_image(v, valid, *tables, out)
     return out
+
+
+def _chunked_bands(heights, mask, vmin, vmax, **params):
+    """:func:`color_bands` chunk by chunk (each cell's colour is its own): the default
+    ``vmin``/``vmax`` come first from one reduction pass over the valid heights."""
+    import dask.array as da
+
+    from .._chunks import _as_dask
+
+    z = _as_dask("heights", heights, None)
+    valid = da.isfinite(z)
+    if mask is not None:
+        valid &= _as_dask("mask", mask, z).astype(bool)
+    if vmin is None or vmax is None:
+        kept = da.where(valid, z, np.nan).astype(np.float32)
+        lo, hi, n = _chunks.reduce(da.nanmin(kept), da.nanmax(kept), valid.sum())
+        if n == 0:  # no valid cell: any range does (every cell is transparent)
+            lo = hi = 0.0
+        vmin = float(lo) if vmin is None else vmin
+        vmax = float(hi) if vmax is None else vmax
+
+    def block(heights, mask):
+        return color_bands(heights, mask=mask, vmin=vmin, vmax=vmax, **params)
+
+    color_bands(np.zeros((3, 3), np.float32), vmin=vmin, vmax=vmax, **params)  # checks now
+    return da.map_blocks(
+        block,
+        z,
+        valid,
+        new_axis=2,
+        chunks=(*z.chunks, (4,)),
+        dtype=np.float32,
+        meta=np.empty((0, 0, 0), np.float32),
+    )

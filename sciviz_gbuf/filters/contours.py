@@ -27,6 +27,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from .. import _chunks
 from ..errors import InputError
 from . import _contour_ink as _p
 from . import _stencil
@@ -43,6 +44,8 @@ _PROFILES = {
     "smooth": (1.5, (0.0, 3.0, -2.0)),
 }
 PROFILES = tuple(_PROFILES)
+#: Cells read around each output cell (the 3x3 operator), for chunked evaluation.
+RADIUS = 1
 # Default g_eps: lines more than this many pixels apart count as lying in a flat region.
 FLAT_SPACING = 1000.0
 
@@ -177,6 +180,23 @@ def contour_lines(
     """
     if (interval is None) == (levels is None):
         raise InputError("contour_lines: give exactly one of interval= or levels=")
+    if _chunks.any_dask(field, mask, gradient):
+        return _chunks.map_stencil(
+            contour_lines,
+            {"field": field, "mask": mask, "gradient": gradient},
+            halo=RADIUS,
+            interval=interval,
+            levels=levels,
+            base=base,
+            width=width,
+            profile=profile,
+            g_eps=g_eps,
+            c_sparse=c_sparse,
+            c_dense=c_dense,
+            dense_spacing=dense_spacing,
+            major_interval=major_interval,
+            major_width=major_width,
+        )
     s, m, g = _prepare(field, mask, gradient)
     prm = _params(width, profile)
     d = 1 / prm[_p.INV_D]

@@ -12,9 +12,13 @@ import math
 import numpy as np
 from numba import njit, prange
 
+from .. import _chunks
 from ..errors import InputError
 
 __all__ = ["hillshade"]
+
+#: Cells read around each output cell (GDAL's 3x3 window), for chunked evaluation.
+RADIUS = 1
 
 _ALGORITHMS = {"horn": 0, "zevenbergen_thorne": 1}
 _VARIANTS = {"regular": 0, "combined": 1, "multidirectional": 2, "igor": 3}
@@ -265,6 +269,19 @@ def hillshade(
     .. [5] Saito, T. & Takahashi, T. (1990). Comprehensible rendering of 3-D shapes. SIGGRAPH '90,
        197-206, §4.3.
     """
+    if _chunks.any_dask(heights, mask):
+        return _chunks.map_stencil(
+            hillshade,
+            {"heights": heights, "mask": mask},
+            halo=RADIUS,
+            dx=dx,
+            dy=dy,
+            azimuth=azimuth,
+            altitude=altitude,
+            z_factor=z_factor,
+            algorithm=algorithm,
+            variant=variant,
+        )
     z = check_grid(heights, dx, dy, z_factor)
     if not 0.0 <= float(altitude) <= 90.0:
         raise InputError(f"altitude: expected degrees in [0, 90], got {altitude!r}")

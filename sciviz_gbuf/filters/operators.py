@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import _chunks
 from ..errors import InputError
 from . import _stencil
 
@@ -35,6 +36,15 @@ __all__ = [
     "sobel_gradient",
     "suppress_zeroth_order",
 ]
+
+
+#: Cells read around each output cell (3x3 operators), for chunked evaluation.
+RADIUS = 1
+
+
+def _chunked(func, arrays: dict, **params):
+    """``func`` chunk by chunk when an input is a dask array (see :mod:`sciviz_gbuf._chunks`)."""
+    return _chunks.map_stencil(func, arrays, halo=RADIUS, **params)
 
 
 def _image(image, name: str = "image") -> np.ndarray:
@@ -105,6 +115,8 @@ def sobel_gradient(image: np.ndarray, *, mask: np.ndarray | None = None) -> np.n
     -------
     (H, W) float32 >= 0; 0 on masked pixels.
     """
+    if _chunks.any_dask(image, mask):
+        return _chunked(sobel_gradient, {"image": image, "mask": mask})
     img = _image(image)
     return _stencil.run("sobel", img, _mask(mask, img.shape))
 
@@ -119,6 +131,8 @@ def second_order(image: np.ndarray, *, mask: np.ndarray | None = None) -> np.nda
     -------
     (H, W) float32, signed; 0 on masked pixels.
     """
+    if _chunks.any_dask(image, mask):
+        return _chunked(second_order, {"image": image, "mask": mask})
     img = _image(image)
     return _stencil.run("second", img, _mask(mask, img.shape))
 
@@ -145,6 +159,8 @@ def normalize_gradient(
     -------
     (H, W) float32 in [0, 1]; 0 on masked pixels.
     """
+    if _chunks.any_dask(gradient, mask):
+        return _chunked(normalize_gradient, {"gradient": gradient, "mask": mask}, k_g=k_g)
     g = _image(gradient, "gradient")
     k = _positive(k_g, "k_g")
     return _stencil.run("normalize", g, _mask(mask, g.shape), k)
@@ -176,6 +192,12 @@ def suppress_zeroth_order(
     -------
     (H, W) float32, signed like ``l``; 0 on masked pixels.
     """
+    if _chunks.any_dask(second, gradient, mask):
+        return _chunked(
+            suppress_zeroth_order,
+            {"second": second, "gradient": gradient, "mask": mask},
+            k_l=k_l,
+        )
     lap = _image(second, "second")
     g = _image(gradient, "gradient")
     if g.shape != lap.shape:
@@ -194,6 +216,8 @@ def c1_discontinuity(image: np.ndarray, *, mask: np.ndarray | None = None) -> np
     -------
     (H, W) float32 >= 0; 0 on masked pixels.
     """
+    if _chunks.any_dask(image, mask):
+        return _chunked(c1_discontinuity, {"image": image, "mask": mask})
     img = _image(image)
     return _stencil.run("c1", img, _mask(mask, img.shape))
 
@@ -211,6 +235,8 @@ def diagonal_depth_discontinuity(
     -------
     (H, W) float32 in [0, 1]; 1 on masked pixels.
     """
+    if _chunks.any_dask(depth, mask):
+        return _chunked(diagonal_depth_discontinuity, {"depth": depth, "mask": mask})
     img = _image(depth, "depth")
     return _stencil.run("diag_depth", img, _mask(mask, img.shape))
 

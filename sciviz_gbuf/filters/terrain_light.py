@@ -16,12 +16,30 @@ import numpy as np
 from numba import njit, prange
 from scipy import ndimage
 
+from .. import _chunks
 from ..errors import InputError
 from .hillshade import check_grid, float32_heights
 
 __all__ = ["cast_shadows", "sky_view"]
 
 _SNAP = 1e-12  # sin/cos of multiples of 90 degrees are off by ~1e-16: snap them to 0 or +-1
+
+
+@njit(cache=True, inline="always")
+def _sample(start: int, offset: float, n: int) -> tuple[int, float]:
+    """Cell and interpolation weight of a ray sample ``offset`` cells from cell ``start`` along
+    an axis of ``n`` cells. The weight comes from the offset alone, not from ``start + offset``,
+    so it is the same wherever the ray starts: a chunk of the grid (out-of-core evaluation)
+    samples exactly as the whole grid. The clamps absorb rounding of samples that land on the
+    first or last cell."""
+    b = math.floor(offset)
+    f = offset - b
+    c = start + int(b)
+    if c < 0:
+        return 0, 0.0
+    if c >= n - 1:
+        return n - 1, 0.0
+    return c, f
 
 
 @njit(cache=True, inline="always")
@@ -67,9 +85,7 @@ def _horizon_tan(
         for k in range(1, min(n_in, max_steps) + 1):
             dist = k * step_len
             r = i + k * di
-            pos = j + k * d_col
-            c0 = min(int(pos), w - 1)  # pos >= -1e-9: truncation is floor (or 0)
-            f = pos - c0
+            c0, f = _sample(j, k * d_col, w)
             # all later samples are at most this high: once the ray clears it, nothing can block
             if min(row_ub[rw, r], col_ub[cw, c0], cell_ub) - z0 <= best * dist:
                 break
@@ -90,9 +106,7 @@ def _horizon_tan(
         for k in range(1, min(n_in, max_steps) + 1):
             dist = k * step_len
             c = j + k * dj
-            pos = i + k * d_row
-            r0 = min(int(pos), h - 1)
-            f = pos - r0
+            r0, f = _sample(i, k * d_row, h)
             if min(row_ub[rw, r0], col_ub[cw, c], cell_ub) - z0 <= best * dist:
                 break
             a = z[r0, c]
@@ -141,6 +155,21 @@ def _local_max(z: np.ndarray, radius: float, dx: float, dy: float) -> np.ndarray
     return ndimage.maximum_filter(
         filled, size=(2 * half_r + 1, 2 * half_c + 1), mode="constant", cval=-np.inf
     )
+
+
+def sky_view_reach(radius: float, dx: float, dy: float) -> int:
+    """Cells :func:`sky_view` reads around a cell (its stencil radius, for chunked evaluation):
+    the most steps the ray march takes, ``radius`` metres in cells of the finer axis (a
+    sample's interpolation neighbour lies across the other axis, which the ray crosses more
+    slowly). The :func:`_local_max` box is wider, but it only bounds the cells the march reads,
+    and a box cut at a chunk's halo still does."""
+    try:
+        r = float(radius)
+    except (TypeError, ValueError):
+        r = math.nan
+    if not (math.isfinite(r) and r > 0.0):
+        raise InputError(f"radius: expected a finite distance > 0 (metres), got {radius!r}")
+    return max(1, math.floor(r / min(float(dx), float(dy)) * (1.0 + 1e-12)))
 
 
 def _which(step: float) -> int:
@@ -341,6 +370,12 @@ def cast_shadows(
             f"sun_radius: expected degrees in [0, {limit:g}] (disc between horizon and zenith), "
             f"got {sun_radius!r}"
         )
+    if _chunks.any_dask(heights, mask):
+        raise InputError(
+            "cast_shadows: a shadow may be cast from anywhere along the sun's ray across the "
+            "whole grid, so it cannot be computed chunk by chunk (dask); compute it on an "
+            "in-memory array, or use sky_view (bounded reach) out of core"
+        )
     z = _prepare(heights, dx, dy, z_factor, mask)
     if float(altitude) == 90.0 or z.size == 0:
         return np.where(np.isnan(z), np.float32(np.nan), np.float32(1.0))
@@ -417,6 +452,19 @@ def sky_view(
         raise InputError(f"directions: expected an integer >= 1, got {directions!r}")
     if int(directions) < 1:
         raise InputError(f"directions: expected an integer >= 1, got {directions!r}")
+    if _chunks.any_dask(heights, mask):
+        _prepare(np.zeros((3, 3), np.float32), dx, dy, z_factor, None)  # checks dx, dy first
+        reach = 50.0 * max(float(dx), float(dy)) if radius is None else radius
+        return _chunks.map_stencil(
+            sky_view,
+            {"heights": heights, "mask": mask},
+            halo=sky_view_reach(reach, dx, dy),
+            dx=dx,
+            dy=dy,
+            directions=directions,
+            radius=reach,
+            z_factor=z_factor,
+        )
     z = _prepare(heights, dx, dy, z_factor, mask)
     if radius is None:
         radius = 50.0 * max(float(dx), float(dy))

@@ -49,11 +49,13 @@ class DEM:
 
     Attributes
     ----------
-    heights : numpy.ndarray
+    heights : numpy.ndarray or dask.array.Array
         float32 (H, W) heights (in the file's unit, normally metres); NaN at nodata cells.
-        Row 0 is the northern (top) row, as in an image.
-    mask : numpy.ndarray
-        bool (H, W), True where the height is valid (finite).
+        Row 0 is the northern (top) row, as in an image. A lazy dask array when the DEM was
+        read with ``read_dem(..., chunks=...)``: nothing is read until it is computed.
+    mask : numpy.ndarray or dask.array.Array
+        bool (H, W), True where the height is valid (finite); lazy (``da.isfinite(heights)``)
+        when ``heights`` is.
     crs : str or None
         The coordinate reference system as the source gives it (``"EPSG:4326"``, WKT), if any.
     transform : tuple of 6 float
@@ -126,7 +128,8 @@ class DEM:
             raise InputError(f"{self.source or 'DEM'}: z_factor must be finite, got {z_factor!r}")
         h, w = self.shape
         rows, cols = np.arange(0, h, step), np.arange(0, w, step)
-        heights = self.heights[::step, ::step]
+        # np.asarray: a lazy DEM computes only the strided points needed here.
+        heights = np.asarray(self.heights[::step, ::step])
         cc, rr = np.meshgrid(cols + 0.5, rows + 0.5)
         x0, dx, rx, y0, ry, dy = self.transform
         x, y = x0 + cc * dx + rr * rx, y0 + cc * ry + rr * dy
@@ -153,6 +156,7 @@ def read_dem(
     transform: GeoTransform | None = None,
     crs: str | None = None,
     geographic: bool | None = None,
+    chunks: int | tuple[int, int] | str | None = None,
 ) -> DEM:
     """Read a DEM file or array into a north-up :class:`DEM` with metres per pixel.
 
@@ -196,11 +200,24 @@ def read_dem(
     are at most 0.1 units is taken as degrees, with a :class:`UserWarning` (pass
     ``geographic=False`` if they are metres). Degrees are never silently taken as metres.
 
+    **Out of core** (``chunks=``): the returned DEM's ``heights`` is a lazy float32 dask array
+    of the same values, read chunk by chunk when computed (only the metadata is read here), and
+    ``mask`` is ``da.isfinite(heights)``; transform, CRS and metres per pixel are the same as in
+    memory. Files GDAL opens (GeoTIFF, VRT, ``.hgt``, ``.asc``, any other raster rasterio reads)
+    are read by rasterio windows, one per chunk and file, in whichever process computes the
+    chunk (the dask graph holds only file names, so it runs on ``dask.distributed`` workers
+    too). A list of tiles (e.g. SRTM ``.hgt`` tiles, or GeoTIFFs of one CRS and resolution on
+    one pixel grid) becomes one lazy mosaic of their union: overlapping cells (SRTM tiles share
+    their edge rows and columns) take any tile's valid value, gaps are NaN. A DataArray backed
+    by dask stays lazy. ``.npy``, ``.npz``, ``.dem`` files and numpy arrays have no windowed
+    reads: they are read whole, then chunked.
+
     Parameters
     ----------
-    source : str, path-like, numpy.ndarray or xarray.DataArray
-        A file (only read, never modified), a 2-D array of heights or a georeferenced 2-D
-        DataArray.
+    source : str, path-like, sequence of them, numpy.ndarray or xarray.DataArray
+        A file (only read, never modified), a list of tiles of one CRS and resolution (read as
+        one mosaic; computed into memory without ``chunks``), a 2-D array of heights or a
+        georeferenced 2-D DataArray.
     spacing : float or (float, float), optional
         Metres per pixel ``(dx, dy)`` (one number for square pixels) for sources without a
         georeference (arrays, ``.npy``, plain TIFF). **Default 1 m**, the pixel grid. An error
@@ -213,6 +230,10 @@ def read_dem(
         CRS of an array or ``.npy`` source, e.g. ``"EPSG:4326"``.
     geographic : bool, optional
         Whether the georeference is in degrees; default: from the CRS, else from the cell size.
+    chunks : int, (int, int) or "auto", optional
+        Read lazily into a dask array of chunks of this many ``(rows, columns)`` (one int:
+        square chunks; ``"auto"``: dask's choice), like rioxarray's ``open_rasterio(chunks=)``.
+        Default: read into memory.
 
     Returns
     -------
@@ -224,9 +245,19 @@ def read_dem(
         Missing file, unknown extension, a file that does not hold what its format says
         (truncated ``.hgt``, ``.asc`` rows/columns not as its header says, an RGB TIFF, a
         truncated or garbled ``.dem``), an array that is not 2-D and numeric, a DataArray
-        without x/y (lon/lat) coordinates or with unevenly spaced ones, or
-        conflicting/invalid ``spacing``/``transform``.
+        without x/y (lon/lat) coordinates or with unevenly spaced ones,
+        conflicting/invalid ``spacing``/``transform``, a bad ``chunks`` value, or tiles of
+        different CRS, resolution or pixel grids.
     """
+    options = {"spacing": spacing, "nodata": nodata, "transform": transform, "crs": crs}
+    if chunks is not None or _is_path_list(source):
+        from ._lazy import read_dem_lazy
+
+        dem = read_dem_lazy(source, chunks=chunks, geographic=geographic, **options)
+        if chunks is None:  # a list of tiles, wanted in memory
+            heights = dem.heights.compute()
+            return DEM(heights, np.isfinite(heights), *_meta(dem))
+        return dem
     name: str | None = None
     if isinstance(source, (str, os.PathLike)):
         path = Path(source)
@@ -264,6 +295,20 @@ def read_dem(
         )
     owned = isinstance(source, (str, os.PathLike))  # a fresh array read from a file
     return _finish(raw, name, spacing=spacing, nodata=nodata, geographic=geographic, owned=owned)
+
+
+def _is_path_list(obj: Any) -> bool:
+    """A list or tuple of file names: tiles of one mosaic."""
+    return (
+        isinstance(obj, (list, tuple))
+        and len(obj) > 0
+        and all(isinstance(p, (str, os.PathLike)) for p in obj)
+    )
+
+
+def _meta(dem: DEM) -> tuple:
+    """Everything of a DEM but its heights and mask, in :class:`DEM` field order."""
+    return dem.crs, dem.transform, dem.pixel_size, dem.geographic, dem.source
 
 
 def _is_dataarray(obj: Any) -> bool:
@@ -313,8 +358,10 @@ def _dataarray_crs(da: Any) -> str | None:
     return None
 
 
-def _read_dataarray(da: Any, name: str) -> tuple[RawDEM, float | None]:
-    """A 2-D DataArray with x/y, lon/lat or longitude/latitude dims -> north-up RawDEM, nodata."""
+def _read_dataarray(da: Any, name: str, *, lazy: bool = False) -> tuple[RawDEM, float | None]:
+    """A 2-D DataArray with x/y, lon/lat or longitude/latitude dims -> north-up RawDEM, nodata.
+
+    ``lazy``: the RawDEM's heights are the DataArray's own (dask) data, flipped lazily."""
     if da.ndim != 2:
         raise InputError(f"{name}: expected a 2-D DataArray, got dims {da.dims}")
     dims = {str(d).lower(): d for d in da.dims}
@@ -326,7 +373,7 @@ def _read_dataarray(da: Any, name: str) -> tuple[RawDEM, float | None]:
         )
     da = da.transpose(y_dim, x_dim)
     (x_first, dx), (y_first, dy) = _axis(da, x_dim, name), _axis(da, y_dim, name)
-    values = np.asarray(da.values)
+    values = da.data if lazy else np.asarray(da.values)
     # North up and east right: flip rows if y increases, columns if x decreases.
     if dy > 0:
         values, y_first, dy = values[::-1], y_first + dy * (values.shape[0] - 1), -dy
@@ -384,7 +431,25 @@ def _looks_geographic(transform: GeoTransform, shape: tuple[int, int]) -> bool:
 
 def _finish(raw: RawDEM, name: str | None, *, spacing, nodata, geographic, owned=False) -> DEM:
     heights = _heights(np.asarray(raw.heights), name, nodata, owned)
-    shape = heights.shape
+    transform, pixel, geo = _georeference(
+        raw, heights.shape, name, spacing=spacing, geographic=geographic
+    )
+    return DEM(heights, np.isfinite(heights), raw.crs, transform, pixel, bool(geo), name)
+
+
+def _georeference(
+    raw: RawDEM,
+    shape: tuple[int, int],
+    name: str | None,
+    *,
+    spacing,
+    geographic: bool | None,
+    stacklevel: int = 4,
+) -> tuple[GeoTransform, tuple[float, float], bool]:
+    """Transform, metres per pixel and geographic flag of a grid of ``shape`` (no pixels read).
+
+    ``stacklevel`` of the degrees warning: 4 points at the caller of :func:`read_dem`.
+    """
     if raw.transform is None:
         if geographic:
             raise InputError(f"{name or 'array'}: geographic=True needs a transform= in degrees")
@@ -406,7 +471,7 @@ def _finish(raw: RawDEM, name: str | None, *, spacing, nodata, geographic, owned
                     f"{abs(transform[5]):g} units within longitude/latitude range: taken as "
                     "degrees (pass geographic=False if they are metres)",
                     UserWarning,
-                    stacklevel=3,
+                    stacklevel=stacklevel,
                 )
     _, dx, rx, y0, ry, dy = transform
     if geo:
@@ -416,4 +481,4 @@ def _finish(raw: RawDEM, name: str | None, *, spacing, nodata, geographic, owned
     else:
         unit = raw.unit_metres  # a projected grid in feet still gets metres per pixel
         pixel = (float(np.hypot(dx, ry) * unit), float(np.hypot(rx, dy) * unit))
-    return DEM(heights, np.isfinite(heights), raw.crs, transform, pixel, bool(geo), name)
+    return transform, pixel, bool(geo)

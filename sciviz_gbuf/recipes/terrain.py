@@ -20,6 +20,7 @@ from collections.abc import Sequence
 import numpy as np
 from numba import njit, prange
 
+from .. import _chunks
 from .._progress import progress
 from ..errors import InputError
 from ..filters import _band_kernels as _bk
@@ -29,14 +30,24 @@ from ..readers import DEM, read_dem
 
 __all__ = ["as_dem", "map_layers", "nice_intervals", "topographic_map", "typical_slope"]
 
+#: Cells :func:`_fill_ring` reads around a nodata cell (the extrapolation ``2a - b``).
+FILL_RING_RADIUS = 2
+
 #: Dark brown, the colour of contour lines on most topographic maps.
 CONTOUR_COLOR = (0.36, 0.20, 0.08)
 
 
 def as_dem(dem: DEM | str | os.PathLike | np.ndarray) -> DEM:
-    """A :class:`~sciviz_gbuf.readers.DEM` as is; anything else through
-    :func:`~sciviz_gbuf.readers.read_dem` (a file, an array in metres, an xarray DataArray)."""
-    return dem if isinstance(dem, DEM) else read_dem(dem)
+    """A :class:`~sciviz_gbuf.readers.DEM` as is; a dask array kept lazy (1 m pixels);
+    anything else through :func:`~sciviz_gbuf.readers.read_dem` (a file, an array in metres,
+    an xarray DataArray)."""
+    if isinstance(dem, DEM):
+        return dem
+    if _chunks.is_dask(dem):
+        from .terrain_chunked import lazy_dem
+
+        return lazy_dem(dem)
+    return read_dem(dem)
 
 
 def _round_up(value: float) -> float:
@@ -73,14 +84,25 @@ def typical_slope(z: np.ndarray, samples: int = 1_000_000) -> float:
     """Median height change per pixel (gradient magnitude) of a height image where it is not
     flat (a sea or a lake would outvote the land), from about ``samples`` pixels on a regular
     lattice; NaN without such a pixel."""
+    lattice = slope_lattice(z, samples)
+    return float("nan") if lattice is None else median_slope(*lattice)
+
+
+def slope_lattice(z, samples: int = 1_000_000) -> tuple | None:
+    """The cells :func:`typical_slope` samples: ``(base, east, south)`` views of ``z`` on a
+    regular lattice, each cell's east and south neighbours (None for a grid under 2x2). Works
+    on dask arrays too (lazy slices)."""
     h, w = z.shape
     if h < 2 or w < 2:
-        return float("nan")
+        return None
     k = max(1, int(math.sqrt(h * w / samples)))
     base = z[: h - 1 : k, : w - 1 : k]
-    gx = z[: h - 1 : k, 1::k][:, : base.shape[1]] - base
-    gy = z[1::k, : w - 1 : k][: base.shape[0]] - base
-    g = np.hypot(gx, gy)
+    return base, z[: h - 1 : k, 1::k][:, : base.shape[1]], z[1::k, : w - 1 : k][: base.shape[0]]
+
+
+def median_slope(base: np.ndarray, east: np.ndarray, south: np.ndarray) -> float:
+    """:func:`typical_slope` of the lattice cells of :func:`slope_lattice`."""
+    g = np.hypot(east - base, south - base)
     g = g[np.isfinite(g) & (g > 0)]
     return float(np.median(g)) if g.size else float("nan")
 
@@ -99,10 +121,23 @@ def contour_intervals(
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN: no range
         lo, hi = float(np.nanmin(z)), float(np.nanmax(z))
+    slope = None
+    if interval is None and major_interval is None:
+        slope = typical_slope(z) / pixels_per_sample
+    return choose_intervals(lo, hi, slope, interval, major_interval)
+
+
+def choose_intervals(
+    lo: float,
+    hi: float,
+    slope: float | None,
+    interval: float | None,
+    major_interval: float | None,
+) -> tuple[float, float, float, float | None]:
+    """:func:`contour_intervals` from the height range and typical slope (NaN range: none)."""
     if not np.isfinite(lo):
         lo, hi = 0.0, 1.0
     if interval is None and major_interval is None:
-        slope = typical_slope(z) / pixels_per_sample
         interval, major_interval = nice_intervals(lo, hi, slope=slope)
     elif interval is None:
         interval = float(major_interval) / 5.0
@@ -260,7 +295,7 @@ def map_layers(
             sea_cmap=None,
         )
     if contours:
-        layers["ink"] = contour_lines(
+        layers["ink"] = map_contours(
             z,
             interval=interval,
             major_interval=major_interval,
@@ -285,6 +320,32 @@ def map_layers(
 
             layers["sky"] = sky_view_factor(z, dx=dx, dy=dy, z_factor=z_factor)
     return layers
+
+
+def map_contours(
+    z,
+    *,
+    interval: float,
+    major_interval: float | None,
+    width: float,
+    major_width: float,
+    dense_spacing: float,
+):
+    """The contour ink of a map (numpy or dask heights): majors never thin out, minors fade
+    where they crowd closer than ``dense_spacing`` (Eq. 15, Fig. 11); without a major interval
+    the one family fades like minors."""
+    if major_interval is None:
+        return contour_lines(
+            z, interval=interval, width=width, c_dense=0.0, dense_spacing=dense_spacing
+        )
+    return contour_lines(
+        z,
+        interval=interval,
+        major_interval=major_interval,
+        width=width,
+        major_width=major_width,
+        dense_spacing=dense_spacing,
+    )
 
 
 def composite(layers: dict, heights: np.ndarray, colour: np.ndarray) -> np.ndarray:
@@ -399,8 +460,33 @@ def topographic_map(
         For anything :func:`read_dem` rejects, or an invalid parameter.
     """
     colour = _colour(contour_color, "contour_color")
+    d = as_dem(dem)
+    if _chunks.is_dask(d.heights):
+        from .terrain_chunked import lazy_topographic_map
+
+        return lazy_topographic_map(
+            d,
+            colour,
+            interval=interval,
+            major_interval=major_interval,
+            contours=contours,
+            width=width,
+            major_width=major_width,
+            dense_spacing=dense_spacing,
+            bands=bands,
+            cmap=cmap,
+            sea_level=sea_level,
+            vmin=vmin,
+            vmax=vmax,
+            relief=relief,
+            azimuth=azimuth,
+            altitude=altitude,
+            z_factor=z_factor,
+            variant=variant,
+            shadows=shadows,
+            sky_view=sky_view,
+        )
     with progress(progress_bar, 4, "topographic map") as bar:
-        d = as_dem(dem)
         bar.step("contours")
         layers = map_layers(
             d.heights,

@@ -1,0 +1,484 @@
+"""Cloud-Optimised GeoTIFF output of images larger than memory (dask), block by block.
+
+:func:`write_cog` computes a (dask) image one chunk at a time, writes each chunk as a window
+of a tiled temporary GeoTIFF beside the output, then lets GDAL's COG driver copy that file
+into a Cloud-Optimised GeoTIFF with internal overviews (it streams: neither step holds the
+whole image). The chunks are computed on any dask scheduler: the local threads (default), a
+local process pool, or a ``dask.distributed`` cluster, whose results are streamed back with a
+bounded number of blocks in flight so the writing process's memory stays bounded too.
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+import uuid
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ._progress import progress
+from .errors import InputError, SciVizGBufError
+
+__all__ = ["local_client", "write_cog"]
+
+#: COG tile edge (GDAL's default for the COG driver).
+BLOCK = 512
+#: GDAL block cache (MB) while writing: a few rows of 512-pixel tiles of a wide map.
+_CACHE_MB = 256
+
+
+def local_client(
+    n_workers: int = 2,
+    *,
+    threads_per_worker: int = 1,
+    memory_limit: str | int | None = "3GB",
+):
+    """A ``distributed.Client`` of a new ``LocalCluster`` of worker processes.
+
+    Each worker runs ``threads_per_worker`` dask threads, and each of those may start numba's
+    ``parallel=True`` kernels (our filters). Numba sizes its thread pool from
+    ``NUMBA_NUM_THREADS`` at import, default all cores, so 2 workers on 2 cores would run 4
+    threads. The workers' environment therefore gets ``NUMBA_NUM_THREADS = cores //
+    (n_workers * threads_per_worker)`` (at least 1), through dask's
+    ``distributed.nanny.pre-spawn-environ`` so it is set before anything imports numba in the
+    worker. A ``NUMBA_NUM_THREADS`` already set in this process's environment wins (dask's
+    rule: existing variables over configuration).
+
+    Parameters
+    ----------
+    n_workers : int, optional
+        Worker processes (default 2).
+    threads_per_worker : int, optional
+        Dask threads per worker (default 1).
+    memory_limit : str or int, optional
+        Per worker, as ``LocalCluster`` takes it (default ``"3GB"``; None: no limit).
+
+    Returns
+    -------
+    distributed.Client
+        Close it with ``client.close()`` and its ``client.cluster.close()``.
+    """
+    import dask
+    from distributed import Client, LocalCluster
+
+    for value, what in ((n_workers, "n_workers"), (threads_per_worker, "threads_per_worker")):
+        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+            raise InputError(f"{what}: expected a positive integer, got {value!r}")
+    numba_threads = max(1, (os.cpu_count() or 1) // (n_workers * threads_per_worker))
+    # Pre-spawn, not the nanny's env=: a spawned worker re-imports the parent's __main__, which
+    # may import numba before env= is applied. Dask puts these into os.environ before it
+    # spawns; the old value is restored after (workers restarted later get the same).
+    spawn_env = dict(dask.config.get("distributed.nanny.pre-spawn-environ", {}))
+    spawn_env["NUMBA_NUM_THREADS"] = numba_threads
+    before = os.environ.get("NUMBA_NUM_THREADS")
+    try:
+        with dask.config.set({"distributed.nanny.pre-spawn-environ": spawn_env}):
+            cluster = LocalCluster(
+                n_workers=n_workers,
+                threads_per_worker=threads_per_worker,
+                processes=True,
+                memory_limit=memory_limit if memory_limit is not None else 0,
+                dashboard_address=None,
+            )
+    finally:
+        if before is None:
+            os.environ.pop("NUMBA_NUM_THREADS", None)
+        else:
+            os.environ["NUMBA_NUM_THREADS"] = before
+    return Client(cluster)
+
+
+def write_cog(
+    image: Any,
+    path: str | os.PathLike,
+    *,
+    dem: object = None,
+    transform: Sequence[float] | None = None,
+    crs: str | None = None,
+    overview_png: str | os.PathLike | None = None,
+    overview_size: int = 2048,
+    client: Any = None,
+    progress_bar: bool = False,
+) -> Path:
+    """Write an image (numpy or dask) as a georeferenced Cloud-Optimised GeoTIFF.
+
+    The image is computed and written chunk by chunk: at no point is all of it in memory, so
+    a lazy :func:`~sciviz_gbuf.recipes.terrain.topographic_map` of a DEM read with
+    ``read_dem(..., chunks=...)`` can be any size the disk holds. Output: 512 x 512 tiles,
+    deflate (horizontal predictor), internal overviews (average resampling, GDAL's COG
+    ``OVERVIEWS=AUTO``: halving until a level fits one tile), BigTIFF when needed, the fourth
+    band tagged as alpha like :func:`~sciviz_gbuf.compose.write_geotiff`. GDAL marks the file
+    ``LAYOUT=COG`` (checked after writing).
+
+    Parameters
+    ----------
+    image : (H, W), (H, W, 3) or (H, W, 4) numpy or dask array
+        uint8 (as is), bool (0/255) or float in ``[0, 1]`` (``round(255 x)``), like
+        :func:`~sciviz_gbuf.compose.write_geotiff`. A dask array is computed one chunk at a
+        time (chunks are grown to multiples of 512 pixels so each write fills whole tiles).
+    path : str or path-like
+        Output ``.tif``/``.tiff``; its directory must exist. A temporary file beside it (removed
+        afterwards) holds the pixels before the COG copy, so that folder needs about the
+        output's size free twice.
+    dem : sciviz_gbuf.readers.DEM, optional
+        Take ``transform`` and ``crs`` from this DEM; its shape must be the image's.
+    transform : 6 floats, optional
+        GDAL geotransform of the pixel corners.
+    crs : str, optional
+        Anything rasterio's ``CRS.from_user_input`` accepts.
+    overview_png : str or path-like, optional
+        Also write a PNG preview of at most ``overview_size`` pixels on its long side, read
+        from the COG's overviews (never the full-resolution grid).
+    overview_size : int, optional
+        Long side of the PNG preview in pixels (default 2048); smaller images keep their size.
+    client : distributed.Client, str or None, optional
+        Where to compute a dask image: None uses dask's current scheduler (the local threads,
+        or the default ``distributed`` client if one is active); a ``Client``; the address of
+        a running scheduler (``"tcp://host:8786"``); or ``"local"`` for a new
+        :func:`local_client` (2 worker processes), closed afterwards. With ``distributed``,
+        at most ``2 x (worker threads) + 1`` blocks are in flight: the rest wait, and each
+        finished block is written and dropped before the next is submitted.
+    progress_bar : bool, optional
+        Show a tqdm bar of blocks written (PyVista's convention).
+
+    Returns
+    -------
+    pathlib.Path
+        The COG written.
+
+    Raises
+    ------
+    InputError
+        A path not ending in ``.tif``/``.tiff`` (``.png`` for ``overview_png``) or in a missing
+        folder, no georeference (neither ``dem=`` nor ``transform=``) or both, a bad
+        transform or CRS, an image of another shape or dtype, a DEM of another shape, a bad
+        ``overview_size`` or ``client``.
+    """
+    import rasterio
+    import rasterio.shutil
+    from rasterio.enums import ColorInterp
+
+    out = _tif_path(path)
+    png = None if overview_png is None else _png_path(overview_png)
+    if isinstance(overview_size, bool) or not isinstance(overview_size, (int, np.integer)):
+        raise InputError(f"overview_size: expected a positive int, got {overview_size!r}")
+    if overview_size < 1:
+        raise InputError(f"overview_size: expected a positive int, got {overview_size!r}")
+    pixels = _as_uint8(image)
+    h, w, c = pixels.shape
+    profile = _profile(h, w, c, dem, transform, crs)
+    is_lazy = _is_dask(pixels)
+    if is_lazy:
+        pixels = _aligned(pixels)
+        n_blocks = len(pixels.chunks[0]) * len(pixels.chunks[1])
+    else:
+        n_blocks = -(-h // (4 * BLOCK))
+    interp = {
+        1: [ColorInterp.gray],
+        3: [ColorInterp.red, ColorInterp.green, ColorInterp.blue],
+        4: [ColorInterp.red, ColorInterp.green, ColorInterp.blue, ColorInterp.alpha],
+    }[c]
+    stem = f".{out.name}.{uuid.uuid4().hex[:8]}"
+    tmp, tmp_cog = out.with_name(stem + ".tmp.tif"), out.with_name(stem + ".cog.tif")
+    large = h * w >= 4_000_000
+    with (
+        # GDAL's block cache defaults to 5 % of RAM, filled with dirty tiles before it flushes:
+        # a fixed cap keeps this process's memory independent of the image size.
+        rasterio.Env(GDAL_CACHEMAX=_CACHE_MB),
+        progress(progress_bar, n_blocks + 1 + (png is not None), "write_cog") as bar,
+    ):
+        try:
+            with rasterio.open(tmp, "w", **profile) as dst:
+                dst.colorinterp = interp  # before the pixels: GDAL sets ExtraSamples then
+                writer = _WindowWriter(dst, bar, n_blocks)
+                if is_lazy:
+                    _compute_into(pixels, writer, client)
+                else:
+                    for r0 in range(0, h, 4 * BLOCK):
+                        writer[r0 : r0 + 4 * BLOCK, 0:w] = pixels[r0 : r0 + 4 * BLOCK]
+            rasterio.shutil.copy(
+                tmp,
+                tmp_cog,
+                driver="COG",
+                BLOCKSIZE=BLOCK,
+                COMPRESS="DEFLATE",
+                # Level 1 on large maps: ~3x faster than 6 for a few % more bytes.
+                LEVEL=1 if large else 6,
+                PREDICTOR="YES",
+                RESAMPLING="AVERAGE",
+                OVERVIEWS="IGNORE_EXISTING",
+                BIGTIFF="IF_SAFER",
+                NUM_THREADS="ALL_CPUS",
+            )
+            os.replace(tmp_cog, out)
+        finally:
+            for f in (tmp, tmp_cog):
+                f.unlink(missing_ok=True)
+        bar.step("COG")
+        check_cog(out)
+        if png is not None:
+            _overview_png(out, png, int(overview_size))
+            bar.step("overview")
+    return out
+
+
+def check_cog(path: str | os.PathLike) -> None:
+    """Raise :class:`~sciviz_gbuf.errors.SciVizGBufError` unless ``path`` is a tiled COG (GDAL's
+    ``LAYOUT=COG``) with overviews (when larger than one tile)."""
+    import rasterio
+
+    with rasterio.open(path) as src:
+        layout = src.tags(ns="IMAGE_STRUCTURE").get("LAYOUT")
+        tiled = src.profile.get("tiled", False)
+        overviews = src.overviews(1)
+        big = max(src.shape) > BLOCK
+    if layout != "COG" or not tiled or (big and not overviews):
+        raise SciVizGBufError(
+            f"{path}: not a valid Cloud-Optimised GeoTIFF (LAYOUT={layout}, tiled={tiled}, "
+            f"overviews={overviews})"
+        )
+
+
+def _tif_path(path: str | os.PathLike) -> Path:
+    p = Path(path)
+    if p.suffix.lower() not in (".tif", ".tiff"):
+        raise InputError(f"path: expected a file name ending in .tif or .tiff, got {str(p)!r}")
+    if not p.parent.is_dir():
+        raise InputError(f"path: no such directory {str(p.parent)!r}")
+    return p
+
+
+def _png_path(path: str | os.PathLike) -> Path:
+    p = Path(path)
+    if p.suffix.lower() != ".png":
+        raise InputError(f"overview_png: expected a file name ending in .png, got {str(p)!r}")
+    if not p.parent.is_dir():
+        raise InputError(f"overview_png: no such directory {str(p.parent)!r}")
+    return p
+
+
+def _is_dask(x: object) -> bool:
+    return type(x).__module__.startswith("dask.array") and hasattr(x, "chunks")
+
+
+def _as_uint8(image: Any):
+    """(H, W, C) uint8, C in 1, 3, 4: numpy converted now, dask lazily (per block)."""
+    if not _is_dask(image):
+        from .compose import to_uint8
+
+        a = to_uint8(image)  # checks shape and dtype with write_geotiff's messages
+        return a[..., None] if a.ndim == 2 else a
+    if not (image.ndim == 2 or (image.ndim == 3 and image.shape[2] in (3, 4))):
+        raise InputError(f"image: expected shape (H, W), (H, W, 3) or (H, W, 4), got {image.shape}")
+    if 0 in image.shape or any(np.isnan(s) for s in image.shape):
+        raise InputError(f"image: expected a non-empty image of known shape, got {image.shape}")
+    if image.dtype == np.bool_:
+        image = image.astype(np.uint8) * np.uint8(255)
+    elif np.issubdtype(image.dtype, np.floating):
+        from .compose import to_uint8
+
+        image = image.map_blocks(to_uint8, dtype=np.uint8)
+    elif image.dtype != np.uint8:
+        raise InputError(f"image: expected float in [0, 1], uint8 or bool, got dtype {image.dtype}")
+    return image[..., None] if image.ndim == 2 else image
+
+
+def _aligned(image):
+    """Rechunk so each block covers whole 512-pixel tiles (edge blocks excepted) and all bands.
+
+    Writes of part of a compressed tile make GDAL recompress it and append it again."""
+    rows, cols = (
+        c if all(s % BLOCK == 0 for s in c[:-1]) else -(-max(c) // BLOCK) * BLOCK
+        for c in image.chunks[:2]
+    )
+    target = (rows, cols, -1)
+    if rows == image.chunks[0] and cols == image.chunks[1] and len(image.chunks[2]) == 1:
+        return image
+    return image.rechunk(target)
+
+
+def _profile(h: int, w: int, c: int, dem: Any, transform: Any, crs: Any) -> dict:
+    """rasterio profile of the temporary tiled GeoTIFF, georeference checked."""
+    from rasterio.crs import CRS
+    from rasterio.transform import Affine
+
+    if dem is not None:
+        if transform is not None or crs is not None:
+            raise InputError("write_cog: give dem= or transform=/crs=, not both")
+        if tuple(dem.shape) != (h, w):
+            raise InputError(f"dem: its shape {tuple(dem.shape)} is not the image's {(h, w)}")
+        transform, crs = dem.transform, dem.crs
+    if transform is None:
+        raise InputError("write_cog: a georeference is needed: pass dem= or transform=")
+    gt = np.asarray(transform, dtype=np.float64).reshape(-1)
+    if gt.size != 6 or not np.isfinite(gt).all() or gt[1] == 0 or gt[5] == 0:
+        raise InputError(
+            f"transform: expected a GDAL 6-tuple with non-zero pixel size, got {transform!r}"
+        )
+    try:
+        crs_obj = None if crs is None else CRS.from_user_input(crs)
+    except Exception as exc:  # rasterio raises its own CRSError family
+        raise InputError(f"crs: rasterio cannot read {str(crs)[:80]!r}: {exc}") from exc
+    profile = {
+        "driver": "GTiff",
+        "width": w,
+        "height": h,
+        "count": c,
+        "dtype": "uint8",
+        "crs": crs_obj,
+        "transform": Affine.from_gdal(*gt),
+        "tiled": True,
+        "blockxsize": BLOCK,
+        "blockysize": BLOCK,
+        # Temporary: fastest deflate; the COG copy recompresses anyway.
+        "compress": "deflate",
+        "zlevel": 1,
+        "interleave": "pixel",
+        "bigtiff": "if_safer",
+        "num_threads": "ALL_CPUS",
+    }
+    if c >= 3:
+        profile["photometric"] = "RGB"
+    if c == 4:
+        profile["alpha"] = "unassociated"
+    return profile
+
+
+class _WindowWriter:
+    """``writer[rows, cols] = block`` writes an (h, w, c) block as a window, one at a time."""
+
+    def __init__(self, dst: Any, bar: Any, total: int) -> None:
+        self.dst, self.bar, self.total, self.done = dst, bar, total, 0
+        self.lock = threading.Lock()
+
+    def __setitem__(self, key: tuple[slice, ...], block: np.ndarray) -> None:
+        from rasterio.windows import Window
+
+        r0, c0 = key[0].start or 0, key[1].start or 0
+        block = np.asarray(block)
+        h, w = block.shape[:2]
+        with self.lock:  # GDAL datasets are not thread-safe; da.store calls from its threads
+            self.dst.write(np.moveaxis(block, 2, 0), window=Window(c0, r0, w, h))
+            self.done += 1
+            self.bar.step(f"block {self.done}/{self.total}")
+
+
+def _compute_into(image, writer: _WindowWriter, client: Any) -> None:
+    """Compute every block of ``image`` and write it, on the scheduler ``client`` says."""
+    from dask.base import get_scheduler
+
+    if client is None:
+        scheduler = get_scheduler(collections=[image])
+        owner = getattr(scheduler, "__self__", None)  # Client.get of an active client
+        if owner is not None and type(owner).__name__ == "Client":
+            _compute_distributed(image, writer, owner)
+        elif getattr(scheduler, "__module__", "") in ("dask.threaded", "dask.local"):
+            import dask.array as da
+
+            # The writer shares this process: dask writes each block as soon as it exists.
+            da.store(image, writer, lock=False, scheduler=scheduler)
+        else:
+            _compute_batches(image, writer, scheduler)
+        return
+    with _client(client) as c:
+        _compute_distributed(image, writer, c)
+
+
+@contextmanager
+def _client(client: Any) -> Iterator[Any]:
+    """A ``Client`` for ``client=``: as given, connected to an address, or a new local one."""
+    if isinstance(client, str):
+        from distributed import Client
+
+        if client == "local":
+            c = local_client()
+            try:
+                yield c
+            finally:
+                cluster = c.cluster
+                c.close()
+                cluster.close()
+            return
+        try:
+            c = Client(client, timeout="10s")
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise InputError(
+                f"client: cannot connect to a dask scheduler at {client!r} ({exc})"
+            ) from exc
+        try:
+            yield c
+        finally:
+            c.close()
+        return
+    if not hasattr(client, "compute") or not hasattr(client, "nthreads"):
+        raise InputError(
+            f"client: expected a distributed.Client, a scheduler address or 'local', got {client!r}"
+        )
+    yield client
+
+
+def _block_slices(image) -> Iterator[tuple[tuple[int, int], tuple[slice, slice]]]:
+    """Block index and (rows, cols) slices of every block, row-major."""
+    r_edges, c_edges = (np.cumsum((0, *c)) for c in image.chunks[:2])
+    for i in range(len(r_edges) - 1):
+        for j in range(len(c_edges) - 1):
+            yield (i, j), (slice(r_edges[i], r_edges[i + 1]), slice(c_edges[j], c_edges[j + 1]))
+
+
+def _compute_distributed(image, writer: _WindowWriter, client: Any) -> None:
+    """Blocks computed on the cluster, gathered one by one as they finish; at most
+    ``2 x threads + 1`` in flight so neither the workers nor this process pile them up."""
+    from distributed import as_completed
+
+    limit = 2 * max(1, sum(client.nthreads().values())) + 1
+    todo = _block_slices(image)
+    where: dict[Any, tuple[slice, slice]] = {}
+
+    def submit(item) -> Any:
+        (i, j), slices = item
+        future = client.compute(image.blocks[i, j])
+        where[future] = slices
+        return future
+
+    queue = as_completed([submit(item) for _, item in zip(range(limit), todo, strict=False)])
+    for future in queue:
+        block = future.result()
+        writer[where.pop(future)] = block
+        future.release()
+        del block
+        item = next(todo, None)
+        if item is not None:
+            queue.add(submit(item))
+
+
+def _compute_batches(image, writer: _WindowWriter, scheduler: Any) -> None:
+    """Other local schedulers (processes): bounded batches of blocks, written in turn."""
+    import dask
+
+    batch = 2 * (os.cpu_count() or 1)
+    items = list(_block_slices(image))
+    for k in range(0, len(items), batch):
+        part = items[k : k + batch]
+        blocks = dask.compute(*(image.blocks[i, j] for (i, j), _ in part), scheduler=scheduler)
+        for (_, slices), block in zip(part, blocks, strict=True):
+            writer[slices] = block
+
+
+def _overview_png(cog: Path, png: Path, size: int) -> None:
+    """A PNG of at most ``size`` pixels on its long side, from the COG's overview levels."""
+    import rasterio
+    from rasterio.enums import Resampling
+
+    from .compose import write_png
+
+    with rasterio.open(cog) as src:
+        h, w = src.shape
+        scale = min(1.0, size / max(h, w))
+        oh, ow = max(1, round(h * scale)), max(1, round(w * scale))
+        # A decimated read: GDAL takes the nearest overview level at least this fine.
+        data = src.read(out_shape=(src.count, oh, ow), resampling=Resampling.average)
+    write_png(png, data[0] if data.shape[0] == 1 else np.moveaxis(data, 0, 2))

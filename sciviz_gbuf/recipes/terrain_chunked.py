@@ -1,0 +1,169 @@
+"""Plan-view topographic maps of DEMs too large for memory: the map of :mod:`.terrain`, chunk
+by chunk on dask, with the same pixels.
+
+Every layer is an operator with a bounded stencil (:mod:`sciviz_gbuf._chunks`): contour lines
+(1 cell), the relief (GDAL's 3x3 window on a grid whose nodata ring is extrapolated: 1 + 2
+cells), the sky view (its ray length in cells), the colour bands and the composite (the cell
+itself). What needs the whole grid comes first, in one reduction pass over the heights: the
+height range (colour map ends, default contour intervals) and the median slope on
+:func:`~.terrain.slope_lattice` (default contour intervals). Giving ``interval``/
+``major_interval`` and ``vmin``/``vmax`` skips that pass. Cast shadows reach across the whole
+grid and are refused.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .. import _chunks
+from ..errors import InputError
+from ..filters import hillshade
+from ..filters import sky_view as sky_view_factor
+from ..filters.hillshade import RADIUS as HILLSHADE_RADIUS
+from ..readers import DEM
+from . import terrain as _t
+
+__all__ = ["RELIEF_HALO", "lazy_dem", "lazy_topographic_map"]
+
+#: Stencil radius of a map's relief: GDAL's 3x3 window on the grid whose nodata ring is
+#: extrapolated from up to 2 cells further.
+RELIEF_HALO = HILLSHADE_RADIUS + _t.FILL_RING_RADIUS
+
+
+def lazy_dem(heights) -> DEM:
+    """A :class:`DEM` around a 2-D dask array of heights in metres on 1 m pixels (like an
+    in-memory array given to :func:`~sciviz_gbuf.readers.read_dem`), kept lazy: float32 with
+    NaN at non-finite values."""
+    import dask.array as da
+
+    z = _chunks._as_dask("heights", heights, None)
+    if min(z.shape) == 0:
+        raise InputError(f"heights: expected a non-empty 2-D array, got shape {z.shape}")
+    z = z.astype(np.float32)
+    z = da.where(da.isinf(z), np.float32(np.nan), z)
+    h = z.shape[0]
+    return DEM(z, da.isfinite(z), None, (0.0, 1.0, 0.0, float(h), 0.0, -1.0), (1.0, 1.0), False)
+
+
+def _statistics(z, interval, major_interval, vmin, vmax):
+    """Height range and contour intervals, from one reduction pass when they are not given."""
+    import dask.array as da
+
+    need_range = vmin is None or vmax is None or (interval is None and major_interval is None)
+    need_slope = interval is None and major_interval is None
+    lo = hi = float("nan")
+    slope = None
+    if need_range:
+        lattice = _t.slope_lattice(z) if need_slope else None
+        lo, hi, *cells = _chunks.reduce(
+            da.nanmin(z), da.nanmax(z), *(lattice if lattice is not None else ())
+        )
+        lo, hi = float(lo), float(hi)
+        if need_slope:
+            slope = _t.median_slope(*cells) if cells else float("nan")
+    lo, hi, interval, major_interval = _t.choose_intervals(lo, hi, slope, interval, major_interval)
+    return lo, hi, interval, major_interval
+
+
+def _relief_block(heights: np.ndarray, **opts) -> np.ndarray:
+    return hillshade(_t._fill_ring(heights), **opts)
+
+
+def lazy_topographic_map(
+    d: DEM,
+    colour: np.ndarray,
+    *,
+    interval,
+    major_interval,
+    contours: bool,
+    width: float,
+    major_width: float,
+    dense_spacing: float,
+    bands,
+    cmap,
+    sea_level,
+    vmin,
+    vmax,
+    relief: bool,
+    azimuth: float,
+    altitude: float,
+    z_factor: float,
+    variant: str,
+    shadows: bool,
+    sky_view: bool,
+):
+    """:func:`~.terrain.topographic_map` of a DEM whose heights are a dask array: a lazy
+    (H, W, 4) uint8 dask array, chunked like the heights, bit-identical to the in-memory map.
+    Parameters as there; ``shadows=True`` is refused (its reach is the whole grid)."""
+    import dask.array as da
+
+    if shadows:
+        raise InputError(
+            "shadows: cast shadows may come from anywhere along the sun's ray across the whole "
+            "grid, so they cannot be drawn chunk by chunk; use sky_view=True (bounded reach) or "
+            "an in-memory DEM"
+        )
+    z = d.heights
+    dx, dy = d.pixel_size
+    lo, hi, interval, major_interval = _statistics(z, interval, major_interval, vmin, vmax)
+    band_interval = major_interval if major_interval is not None else 5.0 * float(interval)
+    opts = _t._check_bands(bands, band_interval)
+    tables = None
+    if opts is not None:
+        tables = _t.band_tables(
+            np.zeros(1, np.float32),
+            interval=opts.get("interval"),
+            levels=opts.get("levels"),
+            base=0.0,
+            cmap=cmap,
+            vmin=lo if vmin is None else vmin,
+            vmax=hi if vmax is None else vmax,
+            sea_level=sea_level,
+            sea_cmap=None,
+        )
+    layers: dict[str, object] = {}
+    if contours:
+        layers["ink"] = _t.map_contours(
+            z,
+            interval=interval,
+            major_interval=major_interval,
+            width=width,
+            major_width=major_width,
+            dense_spacing=dense_spacing,
+        )
+    flat = 1.0
+    if relief:
+        light = {"azimuth": azimuth, "altitude": altitude, "z_factor": z_factor}
+        light["variant"] = variant
+        hillshade(np.zeros((3, 3), np.float32), dx=dx, dy=dy, **light)  # checks now
+        layers["sh"] = _chunks.map_stencil(
+            _relief_block,
+            {"heights": z},
+            halo=RELIEF_HALO,
+            dx=dx,
+            dy=dy,
+            **light,
+        )
+        flat = max(_t._flat_shade(dx=dx, dy=dy, **light), 1e-3)
+        if sky_view:
+            layers["sky"] = sky_view_factor(z, dx=dx, dy=dy, z_factor=z_factor)
+    # Layers whose halo was wider than a chunk come back coarser: back to the map's chunks.
+    layers = {k: v if v.chunks == z.chunks else v.rechunk(z.chunks) for k, v in layers.items()}
+    names = list(layers)
+    has_tables = tables is not None
+
+    def block(heights: np.ndarray, *parts: np.ndarray) -> np.ndarray:
+        lay = dict(zip(names, parts, strict=True))
+        lay.update(tables=tables if has_tables else None, relief=relief, flat=flat)
+        lay.setdefault("ink", None)
+        return _t.composite(lay, heights, colour)
+
+    return da.map_blocks(
+        block,
+        z,
+        *(layers[k] for k in names),
+        new_axis=2,
+        chunks=(*z.chunks, (4,)),
+        dtype=np.uint8,
+        meta=np.empty((0, 0, 0), np.uint8),
+    )

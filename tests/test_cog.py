@@ -1,0 +1,221 @@
+"""write_cog: Cloud-Optimised GeoTIFF from numpy or dask images, on threads and distributed."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+da = pytest.importorskip("dask.array")
+rasterio = pytest.importorskip("rasterio")
+from PIL import Image  # noqa: E402
+
+from sciviz_gbuf.cli import main  # noqa: E402
+from sciviz_gbuf.cog import check_cog, write_cog  # noqa: E402
+from sciviz_gbuf.errors import InputError  # noqa: E402
+
+TRANSFORM = (500_000.0, 10.0, 0.0, 4_200_000.0, 0.0, -10.0)
+CRS = "EPSG:32633"
+
+
+def _rgba(shape=(1100, 1300), chunks=(300, 700)):
+    return da.random.default_rng(3).integers(
+        0, 256, size=(*shape, 4), chunks=(*chunks, 4), dtype=np.uint8
+    )
+
+
+def _read(path) -> np.ndarray:
+    with rasterio.open(path) as src:
+        return np.moveaxis(src.read(), 0, 2)
+
+
+def _assert_cog(path, image, transform=TRANSFORM, crs=CRS) -> None:
+    check_cog(path)
+    with rasterio.open(path) as src:
+        assert src.tags(ns="IMAGE_STRUCTURE")["LAYOUT"] == "COG"
+        assert src.profile["tiled"] and src.block_shapes[0] == (512, 512)
+        assert src.overviews(1)  # > 512 px: at least one level
+        assert src.compression.name.lower() == "deflate"
+        assert src.transform.to_gdal() == transform
+        assert src.crs == rasterio.crs.CRS.from_user_input(crs)
+        if src.count == 4:
+            assert src.colorinterp[3] == rasterio.enums.ColorInterp.alpha
+    np.testing.assert_array_equal(_read(path), np.asarray(image))
+
+
+def test_dask_rgba_round_trip_threads(tmp_path):
+    image = _rgba()
+    out = write_cog(image, tmp_path / "map.tif", transform=TRANSFORM, crs=CRS)
+    assert out == tmp_path / "map.tif"
+    _assert_cog(out, image.compute())
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["map.tif"]  # temp files removed
+
+
+def test_numpy_rgb_and_grey(tmp_path):
+    rgb = np.random.default_rng(4).integers(0, 256, (600, 700, 3), dtype=np.uint8)
+    _assert_cog(write_cog(rgb, tmp_path / "rgb.tif", transform=TRANSFORM, crs=CRS), rgb)
+    grey = rgb[..., 0]
+    out = write_cog(grey, tmp_path / "grey.tif", transform=TRANSFORM, crs=CRS)
+    _assert_cog(out, grey[..., None])
+
+
+def test_dem_georeference_and_float_dask(tmp_path):
+    from sciviz_gbuf.readers import read_dem
+
+    dem = read_dem(np.zeros((520, 530), np.float32), transform=TRANSFORM, crs=CRS)
+    image = da.linspace(0, 1, 520 * 530 * 3, chunks=-1).reshape(520, 530, 3).rechunk(256)
+    out = write_cog(image, tmp_path / "f.tiff", dem=dem)
+    expected = np.rint(image.compute() * 255).astype(np.uint8)
+    _assert_cog(out, expected)
+
+
+def test_overview_png_size(tmp_path):
+    image = _rgba((1100, 1300))
+    png = tmp_path / "small.png"
+    write_cog(image, tmp_path / "m.tif", transform=TRANSFORM, overview_png=png, overview_size=200)
+    with Image.open(png) as im:
+        assert im.size == (200, round(1100 * 200 / 1300)) and im.mode == "RGBA"
+    big = tmp_path / "big.png"
+    write_cog(image[:300, :400], tmp_path / "n.tif", transform=TRANSFORM, overview_png=big)
+    with Image.open(big) as im:
+        assert im.size == (400, 300)  # smaller than overview_size: full size
+
+
+def test_sync_scheduler_and_bounded_batches(tmp_path):
+    import dask
+    from dask.local import get_sync
+
+    from sciviz_gbuf import cog
+
+    image = _rgba((700, 600), (512, 512))
+    with dask.config.set(scheduler="sync"):
+        out = write_cog(image, tmp_path / "s.tif", transform=TRANSFORM)
+    np.testing.assert_array_equal(_read(out), image.compute())
+
+    # The path of process pools and other schedulers that return results to this process.
+    class Sink:
+        def __init__(self):
+            self.image = np.zeros(image.shape, np.uint8)
+
+        def __setitem__(self, key, block):
+            self.image[key[0], key[1]] = block
+
+    sink = Sink()
+    cog._compute_batches(image, sink, get_sync)
+    np.testing.assert_array_equal(sink.image, image.compute())
+
+
+def test_local_cluster_two_worker_processes(tmp_path):
+    distributed = pytest.importorskip("distributed")
+    image = _rgba((1100, 1300), (512, 512))
+    expected = image.compute()
+    with (
+        distributed.LocalCluster(
+            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        out = write_cog(image, tmp_path / "d.tif", transform=TRANSFORM, crs=CRS, client=client)
+    _assert_cog(out, expected)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"path": "x.png"}, "path: expected a file name ending in .tif"),
+        ({"path": "nodir/x.tif"}, "no such directory"),
+        ({"transform": None}, "georeference is needed"),
+        ({"transform": (0, 0, 0, 0, 0, -1)}, "transform"),
+        ({"crs": "EPSG:nonsense"}, "crs"),
+        ({"image": np.zeros((5, 5, 2), np.uint8)}, "shape"),
+        ({"image": da.zeros((5, 5, 2), dtype=np.uint8)}, "shape"),
+        ({"image": da.zeros((5, 5), dtype=np.int16)}, "dtype"),
+        ({"overview_png": "x.jpg"}, "overview_png"),
+        ({"overview_size": 0}, "overview_size"),
+        ({"client": 42}, "client"),
+    ],
+)
+def test_bad_inputs(tmp_path, kwargs, message):
+    args = {"image": da.zeros((8, 8, 4), dtype=np.uint8), "path": "x.tif", "transform": TRANSFORM}
+    args.update(kwargs)
+    for key in ("path", "overview_png"):
+        if isinstance(args.get(key), str):
+            args[key] = tmp_path / args[key]
+    with pytest.raises(InputError, match=message):
+        write_cog(args.pop("image"), args.pop("path"), **args)
+
+
+def test_dem_shape_mismatch(tmp_path):
+    from sciviz_gbuf.readers import read_dem
+
+    dem = read_dem(np.zeros((9, 9), np.float32))
+    with pytest.raises(InputError, match="shape"):
+        write_cog(np.zeros((8, 8, 4), np.uint8), tmp_path / "x.tif", dem=dem)
+
+
+# --- command line ------------------------------------------------------------------------------
+
+
+@pytest.fixture
+def dem_tif(tmp_path):
+    from rasterio.transform import Affine
+
+    y, x = np.mgrid[0:90, 0:110]
+    heights = (200 + 40 * np.sin(x / 9.0) * np.cos(y / 7.0) + y).astype(np.float32)
+    heights[:4, :6] = np.nan
+    path = tmp_path / "dem.tif"
+    with rasterio.open(
+        path,
+        "w",
+        driver="GTiff",
+        width=110,
+        height=90,
+        count=1,
+        dtype="float32",
+        crs=CRS,
+        transform=Affine.from_gdal(*TRANSFORM),
+        nodata=np.nan,
+    ) as dst:
+        dst.write(heights, 1)
+    return path
+
+
+def test_cli_topo_chunks_matches_in_memory(dem_tif, tmp_path, capsys):
+    lazy, eager = tmp_path / "lazy.tif", tmp_path / "eager.tif"
+    common = ["--contours", "20,100", "--no-progress"]
+    assert main(["topo", str(dem_tif), "-o", str(eager), *common]) == 0
+    argv = ["topo", str(dem_tif), "-o", str(lazy), "--chunks", "37,41", "--overview"]
+    assert main([*argv, str(tmp_path / "o.png"), "--overview-size", "55", *common]) == 0
+    assert "chunks (37, 41)" in capsys.readouterr().out
+    check_cog(lazy)
+    np.testing.assert_array_equal(_read(lazy), _read(eager))
+    with rasterio.open(lazy) as src:
+        assert src.transform.to_gdal() == TRANSFORM
+    with Image.open(tmp_path / "o.png") as im:
+        assert im.size == (55, 45)
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["-o", "{tmp}/m.png", "--chunks", "64"], "expected a .tif"),
+        (["-o", "{tmp}/m.jpg"], "ending in .png or .tif"),
+        (["-o", "{tmp}/m.png", "--overview", "{tmp}/o.png"], "--overview"),
+        (["-o", "{tmp}/m.tif", "--dask", "tcp://x:1", "--workers", "3"], "--workers"),
+    ],
+)
+def test_cli_topo_bad_out_of_core_arguments(dem_tif, tmp_path, capsys, argv, message):
+    argv = [a.format(tmp=tmp_path) for a in argv]
+    assert main(["topo", str(dem_tif), *argv]) == 2
+    assert message in capsys.readouterr().err
+
+
+def test_cli_topo_missing_tile(dem_tif, tmp_path, capsys):
+    argv = ["topo", str(dem_tif), str(tmp_path / "missing.tif"), "-o", str(tmp_path / "m.tif")]
+    assert main([*argv, "--chunks", "64"]) == 2
+    assert "missing.tif: no such DEM file" in capsys.readouterr().err
+
+
+def test_cli_topo_bad_chunks(dem_tif, tmp_path, capsys):
+    with pytest.raises(SystemExit):
+        main(["topo", str(dem_tif), "-o", str(tmp_path / "m.tif"), "--chunks", "0"])
+    assert "chunk size" in capsys.readouterr().err
