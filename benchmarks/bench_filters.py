@@ -362,7 +362,7 @@ def _gbuf_kernel(gb, which: str):
             p = np.empty((h, w), dtype=np.float32)
             c = np.empty((h, w), dtype=np.float32)
             kern = k.pair_edge_kernel
-            return _probe(lambda: kern(*args, inv_w, jump, crease, 0.5 * crease, p, c))
+            return _probe(lambda: kern(*args, inv_w, jump, crease, 0.5 * crease, True, p, c))
         out = np.empty((h, w, 4), dtype=np.float32)
         kern = k.edge_map_kernel
         use_c1 = which == "c1"

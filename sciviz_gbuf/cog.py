@@ -4,8 +4,8 @@
 of a tiled temporary GeoTIFF beside the output, then lets GDAL's COG driver copy that file
 into a Cloud-Optimised GeoTIFF with internal overviews (it streams: neither step holds the
 whole image). The chunks are computed on any dask scheduler: the local threads (default), a
-local process pool, or a ``dask.distributed`` cluster, whose results are streamed back with a
-bounded number of blocks in flight so the writing process's memory stays bounded too.
+local process pool, or a ``dask.distributed`` cluster, whose results are streamed back and
+written one by one as they finish, so the writing process's memory stays bounded too.
 """
 
 from __future__ import annotations
@@ -140,8 +140,8 @@ def write_cog(
         or the default ``distributed`` client if one is active); a ``Client``; the address of
         a running scheduler (``"tcp://host:8786"``); or ``"local"`` for a new
         :func:`local_client` (2 worker processes), closed afterwards. With ``distributed``,
-        at most ``2 x (worker threads) + 1`` blocks are in flight: the rest wait, and each
-        finished block is written and dropped before the next is submitted.
+        the blocks are one graph (each input chunk read once), gathered as they finish and
+        each written and dropped at once.
     progress_bar : bool, optional
         Show a tqdm bar of blocks written (PyVista's convention).
 
@@ -430,29 +430,28 @@ def _block_slices(image) -> Iterator[tuple[tuple[int, int], tuple[slice, slice]]
 
 
 def _compute_distributed(image, writer: _WindowWriter, client: Any) -> None:
-    """Blocks computed on the cluster, gathered one by one as they finish; at most
-    ``2 x threads + 1`` in flight so neither the workers nor this process pile them up."""
+    """Blocks computed on the cluster and gathered one by one as they finish, each written
+    and released at once.
+
+    All blocks go to the scheduler as one graph: a map block needs its neighbours' input
+    chunks (the halo), and only within one graph is each input chunk read (or generated) once
+    and dropped when its last block is done (separate submissions read it up to nine times).
+    Memory stays bounded on the workers by dask's queuing of root tasks (inputs are produced
+    as fast as blocks finish) and in this process because writing a block takes far less
+    time than computing one.
+    """
     from distributed import as_completed
 
-    limit = 2 * max(1, sum(client.nthreads().values())) + 1
-    todo = _block_slices(image)
-    where: dict[Any, tuple[slice, slice]] = {}
-
-    def submit(item) -> Any:
-        (i, j), slices = item
-        future = client.compute(image.blocks[i, j])
-        where[future] = slices
-        return future
-
-    queue = as_completed([submit(item) for _, item in zip(range(limit), todo, strict=False)])
+    items = list(_block_slices(image))
+    futures = client.compute([image.blocks[i, j] for (i, j), _ in items])
+    where = {f.key: slices for f, (_, slices) in zip(futures, items, strict=True)}
+    queue = as_completed(futures)
+    del futures  # the queue holds them; each is released once its block is written
     for future in queue:
         block = future.result()
-        writer[where.pop(future)] = block
+        writer[where.pop(future.key)] = block
         future.release()
         del block
-        item = next(todo, None)
-        if item is not None:
-            queue.add(submit(item))
 
 
 def _compute_batches(image, writer: _WindowWriter, scheduler: Any) -> None:

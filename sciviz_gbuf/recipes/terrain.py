@@ -366,17 +366,23 @@ def composite(layers: dict, heights: np.ndarray, colour: np.ndarray) -> np.ndarr
             sea_cmap=None,
         )
     empty = np.zeros((0, 0), np.float32)
+
+    def layer(name: str) -> np.ndarray:
+        # contiguous float32 always: one compiled signature of the kernel, not one per layout
+        a = layers.get(name)
+        return empty if a is None else np.ascontiguousarray(a, dtype=np.float32)
+
     out = np.empty((*z.shape, 4), dtype=np.uint8)
     _bk.map_image(
         z,
         layers["tables"] is not None,
         *tables,
         bool(layers["relief"]),
-        layers.get("sh", empty),
+        layer("sh"),
         np.float32(layers.get("flat", 1.0)),
-        layers.get("lit", empty),
-        layers.get("sky", empty),
-        empty if layers["ink"] is None else layers["ink"],
+        layer("lit"),
+        layer("sky"),
+        layer("ink"),
         colour.astype(np.float32),
         out,
     )
