@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import os
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -14,6 +16,28 @@ if not os.environ.get("DISPLAY"):
     os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
 
 SHARED_DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+
+_WARMUP: subprocess.Popen | None = None
+
+
+def pytest_configure(config):
+    """Compile numba kernels on the other core meanwhile (see ``_numba_warmup.py``): on a
+    fresh clone compiling them is most of the run, and numba compiles on one core."""
+    global _WARMUP
+    if os.environ.get("SCIVIZ_GBUF_NO_WARMUP") or hasattr(config, "workerinput"):
+        return
+    _WARMUP = subprocess.Popen(
+        [sys.executable, str(Path(__file__).with_name("_numba_warmup.py"))],
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+
+
+def pytest_unconfigure(config):
+    if _WARMUP is not None and _WARMUP.poll() is None:
+        _WARMUP.kill()
+        _WARMUP.wait()
 
 
 def camera_basis(cam):

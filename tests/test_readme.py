@@ -43,6 +43,9 @@ def test_readme_python_example_runs(tmp_path, monkeypatch):
     assert not np.array_equal(plug["enhanced"], plug["moved"])
     pipe = next(ns for ns in spaces if "runs" in ns)
     assert pipe["runs"] == (1, 2)
+    scale = next(ns for ns in spaces if "cog" in ns)
+    assert scale["rgba"].shape == (1500, 2000, 4) and scale["cog"].is_file()
+    assert (tmp_path / "big_map.png").is_file()
 
 
 def test_quick_start_has_two_commands_and_ci_runs_the_test_one():
