@@ -303,26 +303,14 @@ def _aligned(image):
 
 def _profile(h: int, w: int, c: int, dem: Any, transform: Any, crs: Any) -> dict:
     """rasterio profile of the temporary tiled GeoTIFF, georeference checked."""
-    from rasterio.crs import CRS
     from rasterio.transform import Affine
 
-    if dem is not None:
-        if transform is not None or crs is not None:
-            raise InputError("write_cog: give dem= or transform=/crs=, not both")
-        if tuple(dem.shape) != (h, w):
-            raise InputError(f"dem: its shape {tuple(dem.shape)} is not the image's {(h, w)}")
-        transform, crs = dem.transform, dem.crs
-    if transform is None:
-        raise InputError("write_cog: a georeference is needed: pass dem= or transform=")
-    gt = np.asarray(transform, dtype=np.float64).reshape(-1)
-    if gt.size != 6 or not np.isfinite(gt).all() or gt[1] == 0 or gt[5] == 0:
-        raise InputError(
-            f"transform: expected a GDAL 6-tuple with non-zero pixel size, got {transform!r}"
-        )
-    try:
-        crs_obj = None if crs is None else CRS.from_user_input(crs)
-    except Exception as exc:  # rasterio raises its own CRSError family
-        raise InputError(f"crs: rasterio cannot read {str(crs)[:80]!r}: {exc}") from exc
+    from .compose import _transform, rasterio_crs
+
+    if dem is not None and transform is None and crs is None and tuple(dem.shape) != (h, w):
+        raise InputError(f"dem: its shape {tuple(dem.shape)} is not the image's {(h, w)}")
+    gt = _transform(dem, transform, crs, "write_cog")
+    crs_obj = rasterio_crs(dem.crs if dem is not None else crs)
     profile = {
         "driver": "GTiff",
         "width": w,

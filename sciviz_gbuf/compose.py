@@ -272,6 +272,32 @@ def write_png(path: str | os.PathLike, image: np.ndarray) -> Path:
     return p
 
 
+def _transform(dem: object, transform: object, crs: object, who: str) -> np.ndarray:
+    """The checked GDAL geotransform of ``dem=`` or ``transform=`` (exactly one of them)."""
+    if dem is not None:
+        if transform is not None or crs is not None:
+            raise InputError(f"{who}: give dem= or transform=/crs=, not both")
+        transform = dem.transform
+    if transform is None:
+        raise InputError(f"{who}: a georeference is needed: pass dem= or transform=")
+    gt = np.asarray(transform, dtype=np.float64).reshape(-1)
+    if gt.size != 6 or not np.isfinite(gt).all() or gt[1] == 0 or gt[5] == 0:
+        raise InputError(
+            f"transform: expected a GDAL 6-tuple with non-zero pixel size, got {transform!r}"
+        )
+    return gt
+
+
+def rasterio_crs(crs: object):
+    """``crs`` (EPSG code, WKT, ...) as a rasterio CRS, None as None; InputError if unreadable."""
+    from rasterio.crs import CRS
+
+    try:
+        return None if crs is None else CRS.from_user_input(crs)
+    except Exception as exc:  # rasterio raises its own CRSError family
+        raise InputError(f"crs: rasterio cannot read {str(crs)[:80]!r}: {exc}") from exc
+
+
 def write_geotiff(
     path: str | os.PathLike,
     image: np.ndarray,
@@ -305,33 +331,19 @@ def write_geotiff(
         raise InputError(f"path: expected a file name ending in .tif or .tiff, got {str(p)!r}")
     if not p.parent.is_dir():
         raise InputError(f"path: no such directory {str(p.parent)!r}")
-    if dem is not None:
-        if transform is not None or crs is not None:
-            raise InputError("write_geotiff: give dem= or transform=/crs=, not both")
-        transform, crs = dem.transform, dem.crs
-    if transform is None:
-        raise InputError("write_geotiff: a georeference is needed: pass dem= or transform=")
-    gt = np.asarray(transform, dtype=np.float64).reshape(-1)
-    if gt.size != 6 or not np.isfinite(gt).all() or gt[1] == 0 or gt[5] == 0:
-        raise InputError(
-            f"transform: expected a GDAL 6-tuple with non-zero pixel size, got {transform!r}"
-        )
+    gt = _transform(dem, transform, crs, "write_geotiff")
     pixels = to_uint8(image)
     if pixels.ndim == 2:
         pixels = pixels[..., None]
     try:
         import rasterio
-        from rasterio.crs import CRS
         from rasterio.enums import ColorInterp
         from rasterio.transform import Affine
     except ImportError as exc:
         raise InputError(
             f"{p}: writing GeoTIFF needs rasterio: pip install 'sciviz-gbuf[geo]'"
         ) from exc
-    try:
-        crs_obj = None if crs is None else CRS.from_user_input(crs)
-    except Exception as exc:  # rasterio raises its own CRSError family
-        raise InputError(f"crs: rasterio cannot read {str(crs)[:80]!r}: {exc}") from exc
+    crs_obj = rasterio_crs(dem.crs if dem is not None else crs)
     h, w, c = pixels.shape
     profile = {
         "driver": "GTiff",

@@ -279,21 +279,11 @@ def map_layers(
     Every option is checked before the work starts."""
     z = heights
     lo, hi, interval, major_interval = contour_intervals(z, interval, major_interval)
-    band_interval = major_interval if major_interval is not None else 5.0 * float(interval)
-    opts = _check_bands(bands, band_interval)
-    layers: dict[str, object] = {"tables": None, "ink": None, "relief": relief}
-    if opts is not None:
-        layers["tables"] = band_tables(
-            np.zeros(1, np.float32),  # unused: the range is given
-            interval=opts.get("interval"),
-            levels=opts.get("levels"),
-            base=0.0,
-            cmap=cmap,
-            vmin=lo if vmin is None else vmin,
-            vmax=hi if vmax is None else vmax,
-            sea_level=sea_level,
-            sea_cmap=None,
-        )
+    layers: dict[str, object] = {"ink": None, "relief": relief}
+    layers["tables"] = map_band_tables(
+        bands, interval, major_interval, cmap, lo if vmin is None else vmin,
+        hi if vmax is None else vmax, sea_level,
+    )  # fmt: skip
     if contours:
         layers["ink"] = map_contours(
             z,
@@ -320,6 +310,26 @@ def map_layers(
 
             layers["sky"] = sky_view_factor(z, dx=dx, dy=dy, z_factor=z_factor)
     return layers
+
+
+def map_band_tables(bands, interval, major_interval, cmap, vmin, vmax, sea_level):
+    """The band colours' kernel arguments of a map (None for no bands): one band per major
+    interval (five minors) unless ``bands`` says otherwise (see :func:`topographic_map`)."""
+    band_interval = major_interval if major_interval is not None else 5.0 * float(interval)
+    opts = _check_bands(bands, band_interval)
+    if opts is None:
+        return None
+    return band_tables(
+        np.zeros(1, np.float32),  # unused: the range is given
+        interval=opts.get("interval"),
+        levels=opts.get("levels"),
+        base=0.0,
+        cmap=cmap,
+        vmin=vmin,
+        vmax=vmax,
+        sea_level=sea_level,
+        sea_cmap=None,
+    )
 
 
 def map_contours(

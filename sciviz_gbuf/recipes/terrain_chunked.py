@@ -106,21 +106,10 @@ def lazy_topographic_map(
     z = d.heights
     dx, dy = d.pixel_size
     lo, hi, interval, major_interval = _statistics(z, interval, major_interval, vmin, vmax)
-    band_interval = major_interval if major_interval is not None else 5.0 * float(interval)
-    opts = _t._check_bands(bands, band_interval)
-    tables = None
-    if opts is not None:
-        tables = _t.band_tables(
-            np.zeros(1, np.float32),
-            interval=opts.get("interval"),
-            levels=opts.get("levels"),
-            base=0.0,
-            cmap=cmap,
-            vmin=lo if vmin is None else vmin,
-            vmax=hi if vmax is None else vmax,
-            sea_level=sea_level,
-            sea_cmap=None,
-        )
+    tables = _t.map_band_tables(
+        bands, interval, major_interval, cmap, lo if vmin is None else vmin,
+        hi if vmax is None else vmax, sea_level,
+    )  # fmt: skip
     layers: dict[str, object] = {}
     if contours:
         layers["ink"] = _t.map_contours(
