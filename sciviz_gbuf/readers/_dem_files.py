@@ -166,6 +166,20 @@ def read_npz(path: Path) -> RawDEM:
     return RawDEM(elev, (west, abs(dx), 0.0, north, 0.0, -abs(dy)))
 
 
+def raster_georeference(src, path: Path) -> tuple[str | None, bool | None, tuple | None]:
+    """``(crs, geographic, GDAL transform or None)`` of an open rasterio dataset that holds a
+    DEM; InputError for an RGB(A) image (three or more uint8 bands)."""
+    if src.count >= 3 and all(t == "uint8" for t in src.dtypes):
+        raise InputError(
+            f"{path}: {src.count} uint8 bands look like an RGB(A) image, not a DEM: "
+            "expected one band of heights"
+        )
+    crs = src.crs.to_string() if src.crs else None
+    geographic = bool(src.crs.is_geographic) if src.crs else None
+    georeferenced = crs is not None or not src.transform.is_identity
+    return crs, geographic, src.transform.to_gdal() if georeferenced else None
+
+
 def read_geotiff(path: Path) -> RawDEM:
     """Band 1 of a GeoTIFF via rasterio (the ``geo`` extra); no transform if not georeferenced."""
     try:
@@ -179,17 +193,9 @@ def read_geotiff(path: Path) -> RawDEM:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", NotGeoreferencedWarning)
             with rasterio.open(path) as src:
-                if src.count >= 3 and all(t == "uint8" for t in src.dtypes):
-                    raise InputError(
-                        f"{path}: {src.count} uint8 bands look like an RGB(A) image, not a DEM: "
-                        "expected one band of heights"
-                    )
+                crs, geographic, transform = raster_georeference(src, path)
                 values = src.read(1)
                 nodata = src.nodata
-                crs = src.crs.to_string() if src.crs else None
-                geographic = bool(src.crs.is_geographic) if src.crs else None
-                georeferenced = crs is not None or not src.transform.is_identity
-                transform = src.transform.to_gdal() if georeferenced else None
     except rasterio.errors.RasterioError as exc:
         raise InputError(f"{path}: cannot read as a GeoTIFF ({exc})") from exc
     if transform is None:

@@ -20,7 +20,13 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from ._dem_files import GeoTransform, RawDEM, _blank_nodata, crs_is_geographic
+from ._dem_files import (
+    GeoTransform,
+    RawDEM,
+    _blank_nodata,
+    crs_is_geographic,
+    raster_georeference,
+)
 
 __all__ = ["WindowReader", "read_dem_lazy"]
 
@@ -153,16 +159,8 @@ def _file_meta(path: Path) -> _FileMeta:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", NotGeoreferencedWarning)
             with rasterio.open(path) as src:
-                if src.count >= 3 and all(t == "uint8" for t in src.dtypes):
-                    raise InputError(
-                        f"{path}: {src.count} uint8 bands look like an RGB(A) image, not a DEM: "
-                        "expected one band of heights"
-                    )
+                crs, geographic, transform = raster_georeference(src, path)
                 dtype = np.dtype(src.dtypes[0])
-                crs = src.crs.to_string() if src.crs else None
-                geographic = bool(src.crs.is_geographic) if src.crs else None
-                georeferenced = crs is not None or not src.transform.is_identity
-                transform = src.transform.to_gdal() if georeferenced else None
                 stat = path.stat()
                 stamp = (stat.st_mtime_ns, stat.st_size)
                 meta = _FileMeta(
