@@ -28,7 +28,7 @@ the timing (``capture`` then skips that filter).
 
 The stage breakdown comes from separate, instrumented ``capture()`` calls: the internal steps
 capture.py calls (``collect_surfaces``/``_merge``, ``IdRenderer``, ``_kernels.resolve_hits``,
-and the VTK filters inside ``sciviz_gbuf.scene``) are wrapped with timers for the duration of
+and the VTK filters inside ``sciviz_gbuf.core.scene``) are wrapped with timers for the duration of
 those calls only. The headline ``capture`` column is always the un-instrumented public call.
 A stage the package no longer has under the same name shows as ``-``.
 """
@@ -67,15 +67,15 @@ MESHES: tuple[tuple[str, int], ...] = (("100k", 225), ("1M", 708))
 # Stage keys of the instrumented capture, and what they wrap.
 # key -> (module name, attribute path)
 _PATCHES: dict[str, tuple[str, str]] = {
-    "collect": ("sciviz_gbuf.capture", "collect_surfaces"),
-    "merge": ("sciviz_gbuf.capture", "_merge"),
-    "surface": ("sciviz_gbuf.scene", "_surface_polydata"),
-    "triangulate": ("sciviz_gbuf.scene", "_triangulate"),
-    "normals": ("sciviz_gbuf.scene", "_compute_normals"),
-    "gl_setup": ("sciviz_gbuf._render", "IdRenderer.__init__"),
-    "gl_render": ("sciviz_gbuf._render", "IdRenderer.render"),
-    "gl_close": ("sciviz_gbuf._render", "IdRenderer.close"),
-    "resolve": ("sciviz_gbuf._kernels", "resolve_hits"),
+    "collect": ("sciviz_gbuf.core.capture", "collect_surfaces"),
+    "merge": ("sciviz_gbuf.core.capture", "_merge"),
+    "surface": ("sciviz_gbuf.core.scene", "_surface_polydata"),
+    "triangulate": ("sciviz_gbuf.core.scene", "_triangulate"),
+    "normals": ("sciviz_gbuf.core.scene", "_compute_normals"),
+    "gl_setup": ("sciviz_gbuf.core._render", "IdRenderer.__init__"),
+    "gl_render": ("sciviz_gbuf.core._render", "IdRenderer.render"),
+    "gl_close": ("sciviz_gbuf.core._render", "IdRenderer.close"),
+    "resolve": ("sciviz_gbuf.core._capture_kernels", "resolve_hits"),
 }
 
 
@@ -130,7 +130,7 @@ def run_valuepass(mesh: pv.PolyData, n: int) -> float:
         vtkValuePass,
     )
 
-    from sciviz_gbuf._render import new_render_window
+    from sciviz_gbuf.core._render import new_render_window
 
     gc.collect()
     t0 = time.perf_counter()
@@ -276,7 +276,7 @@ def make_meshes(labels: set[str]) -> list[tuple[str, bool, pv.PolyData]]:
 
 
 def machine_facts(caps: list[str]) -> list[str]:
-    from sciviz_gbuf._render import new_render_window
+    from sciviz_gbuf.core._render import new_render_window
 
     try:
         n_avail = len(os.sched_getaffinity(0))

@@ -39,9 +39,9 @@ import numpy as np
 import pydicom
 import pyvista as pv
 
-from sciviz_gbuf.capture import capture
 from sciviz_gbuf.compose import write_png
-from sciviz_gbuf.isosurface import isosurface
+from sciviz_gbuf.core.capture import capture
+from sciviz_gbuf.core.isosurface import isosurface
 from sciviz_gbuf.readers.dicom import read_dicom_series
 from sciviz_gbuf.recipes.medical import ct_enhance, view_camera
 

@@ -106,8 +106,8 @@ def part2(size: int, workers: list[int], chunks: int, memory_limit: str) -> list
     import dask.array as da
 
     import sciviz_gbuf as sg
-    from sciviz_gbuf.cog import local_client, write_cog
     from sciviz_gbuf.datasets import synthetic_dem
+    from sciviz_gbuf.writers.cog import local_client, write_cog
 
     rows = []
     mpix = size * size / 1e6

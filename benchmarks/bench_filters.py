@@ -287,7 +287,7 @@ def _probe(call: Callable[[], object]) -> Callable[[], object] | None:
 
 
 # Modules of the public operators whose ``np.empty`` calls allocate the results.
-_ALLOC_MODULES = ("sciviz_gbuf.filters.operators", "sciviz_gbuf.filters._stencil")
+_ALLOC_MODULES = ("sciviz_gbuf.filters.operators", "sciviz_gbuf.filters._stencil_kernels")
 
 
 class _ReusedEmpty:

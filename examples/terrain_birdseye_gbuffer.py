@@ -15,9 +15,9 @@ import sys
 from pathlib import Path
 
 import sciviz_gbuf as sg
+from sciviz_gbuf.apps.demo import terrain_birdseye_camera
 from sciviz_gbuf.compose import colorize, montage, normals_to_rgb, write_png
 from sciviz_gbuf.datasets import load_jacksboro_terrain
-from sciviz_gbuf.demo import terrain_birdseye_camera
 
 WINDOW = (1024, 768)
 

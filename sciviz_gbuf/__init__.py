@@ -7,15 +7,15 @@ image-space enhancements on them (:mod:`sciviz_gbuf.filters`), following Saito &
 
 from __future__ import annotations
 
-from .camera import CameraInfo
-from .capture import capture
-from .cog import local_client, write_cog
+from .core.camera import CameraInfo
+from .core.capture import capture
+from .core.gbuffer import GBuffer
 from .errors import InputError, RenderError, SciVizGBufError
-from .gbuffer import GBuffer
 from .recipes.birdseye import birdseye_map, sumi_e
 from .recipes.medical import ct_enhance
 from .recipes.surface import surface_analysis
 from .recipes.terrain import topographic_map
+from .writers.cog import local_client, write_cog
 
 __version__ = "0.1.0"
 

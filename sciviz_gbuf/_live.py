@@ -37,11 +37,11 @@ from vtkmodules.util.numpy_support import numpy_to_vtk
 from vtkmodules.vtkCommonDataModel import vtkImageData
 from vtkmodules.vtkRenderingCore import vtkActor2D, vtkImageMapper, vtkRenderer
 
-from .capture import capture
+from .core.capture import capture
+from .core.gbuffer import GBuffer
 from .errors import InputError
 from .filters import crease_edges, edge_map, profile_edges
-from .gbuffer import GBuffer
-from .recipes.illustration import fig7_edge_map
+from .styles.illustration import fig7_edge_map
 
 __all__ = [
     "CLIENT_SIDE_WARNING",

@@ -265,7 +265,7 @@ def write_png(path: str | os.PathLike, image: np.ndarray) -> Path:
         raise InputError(f"path: no such directory {str(p.parent)!r}")
     pixels = to_uint8(image)
     if pixels.shape[0] * pixels.shape[1] >= _LARGE_PNG:
-        from ._png import write_png_fast
+        from .writers.png import write_png_fast
 
         return write_png_fast(p, pixels)
     Image.fromarray(pixels).save(p, format="PNG")

@@ -33,12 +33,12 @@ import numpy as np
 import pyvista as pv
 
 from . import _live
-from .capture import capture as _capture
+from .core.capture import capture as _capture
+from .core.gbuffer import GBuffer
 from .errors import InputError
-from .gbuffer import GBuffer
 from .readers.dem import read_dem
-from .recipes.illustration import STYLES, illustrate
 from .recipes.terrain import topographic_map as _topographic_map
+from .styles.illustration import STYLES, illustrate
 
 __all__ = ["ACCESSOR_NAME", "GBufAccessor", "GBufPlotterComponent", "register"]
 

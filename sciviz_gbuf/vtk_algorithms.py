@@ -108,17 +108,17 @@ from vtkmodules.vtkCommonExecutionModel import vtkAlgorithm, vtkStreamingDemandD
 from vtkmodules.vtkRenderingCore import vtkCamera, vtkRenderer
 
 from . import filters as F
-from .camera import VIEWS, CameraInfo
-from .capture import (
+from .core.camera import VIEWS, CameraInfo
+from .core.capture import (
     DEFAULT_WINDOW_SIZE,
     _check_scalars,
     _check_window_size,
     _resolve_camera,
     capture,
 )
+from .core.gbuffer import _META, GBuffer
+from .core.scene import _is_plotter, scene_items
 from .errors import InputError
-from .gbuffer import _META, GBuffer
-from .scene import _is_plotter, scene_items
 
 __all__ = [
     "ALGORITHMS",

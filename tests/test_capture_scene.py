@@ -10,7 +10,7 @@ from vtkmodules.vtkCommonCore import mutable
 from vtkmodules.vtkCommonDataModel import vtkCellLocator
 
 import sciviz_gbuf as sg
-from sciviz_gbuf import _render
+from sciviz_gbuf.core import _render
 
 
 def _two_objects():

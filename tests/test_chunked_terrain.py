@@ -269,8 +269,8 @@ def test_local_cluster_to_cog_equals_the_in_memory_map(tmp_path):
     workers' memory is mostly numba's compiler on a fresh clone, not data.)"""
     pytest.importorskip("distributed")
     rasterio = pytest.importorskip("rasterio")
-    from sciviz_gbuf.cog import local_client, write_cog
     from sciviz_gbuf.datasets import synthetic_dem
+    from sciviz_gbuf.writers.cog import local_client, write_cog
 
     dem = synthetic_dem((1100, 1300), chunks=(301, 257))
     z = dem.heights.compute()

@@ -10,8 +10,8 @@ rasterio = pytest.importorskip("rasterio")
 from PIL import Image  # noqa: E402
 
 from sciviz_gbuf.cli import main  # noqa: E402
-from sciviz_gbuf.cog import check_cog, write_cog  # noqa: E402
 from sciviz_gbuf.errors import InputError  # noqa: E402
+from sciviz_gbuf.writers.cog import check_cog, write_cog  # noqa: E402
 
 TRANSFORM = (500_000.0, 10.0, 0.0, 4_200_000.0, 0.0, -10.0)
 CRS = "EPSG:32633"
@@ -84,7 +84,7 @@ def test_sync_scheduler_and_bounded_batches(tmp_path):
     import dask
     from dask.local import get_sync
 
-    from sciviz_gbuf import cog
+    from sciviz_gbuf.writers import cog
 
     image = _rgba((700, 600), (512, 512))
     with dask.config.set(scheduler="sync"):

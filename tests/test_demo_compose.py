@@ -13,16 +13,9 @@ from hypothesis.extra.numpy import arrays
 from PIL import Image
 
 from sciviz_gbuf import GBuffer, InputError
-from sciviz_gbuf.compose import (
-    colorize,
-    ids_to_rgb,
-    montage,
-    normals_to_rgb,
-    to_uint8,
-    write_png,
-)
+from sciviz_gbuf.apps.demo import run_demo, terrain_birdseye_camera
+from sciviz_gbuf.compose import colorize, ids_to_rgb, montage, normals_to_rgb, to_uint8, write_png
 from sciviz_gbuf.datasets import load_jacksboro_terrain, load_nut
-from sciviz_gbuf.demo import run_demo, terrain_birdseye_camera
 
 WHITE = np.ones(3, dtype=np.float32)
 

@@ -18,7 +18,7 @@ from vtkmodules.vtkFiltersCore import vtkFeatureEdges
 from vtkmodules.vtkRenderingCore import vtkCamera
 
 import sciviz_gbuf as sg
-from sciviz_gbuf.camera import CameraInfo
+from sciviz_gbuf.core.camera import CameraInfo
 
 SIZE = (200, 200)
 

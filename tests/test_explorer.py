@@ -16,10 +16,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from sciviz_gbuf.apps.explorer import (
+    Explorer,
+    Params,
+    encode_jpeg_data_url,
+    load_scene,
+    style_image,
+)
 from sciviz_gbuf.cli import build_parser
 from sciviz_gbuf.datasets import load_nut
 from sciviz_gbuf.errors import InputError
-from sciviz_gbuf.explorer import Explorer, Params, encode_jpeg_data_url, load_scene, style_image
 
 ROOT = Path(__file__).resolve().parents[1]
 

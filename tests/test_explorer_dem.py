@@ -9,9 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from sciviz_gbuf.apps.explorer import Explorer, Params
 from sciviz_gbuf.datasets import load_jacksboro_dem, load_nut
 from sciviz_gbuf.errors import InputError
-from sciviz_gbuf.explorer import Explorer, Params
 from sciviz_gbuf.readers import read_dem
 from sciviz_gbuf.recipes.terrain import topographic_map
 

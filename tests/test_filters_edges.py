@@ -14,7 +14,7 @@ from hypothesis.extra import numpy as hnp
 from scipy import ndimage
 
 import sciviz_gbuf as sg
-from sciviz_gbuf.camera import CameraInfo
+from sciviz_gbuf.core.camera import CameraInfo
 from sciviz_gbuf.errors import InputError
 from sciviz_gbuf.filters import (
     crease_edges,

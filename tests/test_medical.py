@@ -14,8 +14,8 @@ from scipy.spatial.transform import Rotation
 
 import sciviz_gbuf as sg
 from sciviz_gbuf.cli import main
+from sciviz_gbuf.core.isosurface import ISO_PRESETS, isosurface
 from sciviz_gbuf.errors import InputError
-from sciviz_gbuf.isosurface import ISO_PRESETS, isosurface
 from sciviz_gbuf.recipes.medical import (
     VIEWS,
     ct_enhance,

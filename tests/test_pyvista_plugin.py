@@ -17,7 +17,7 @@ from sciviz_gbuf import pyvista_plugin
 from sciviz_gbuf.errors import InputError
 from sciviz_gbuf.filters import edge_map
 from sciviz_gbuf.readers import read_dem
-from sciviz_gbuf.recipes.illustration import illustrate
+from sciviz_gbuf.styles.illustration import illustrate
 
 RED, BLUE = (1.0, 0.0, 0.0), (0.0, 0.0, 1.0)
 

@@ -16,8 +16,8 @@ from scipy import ndimage
 import sciviz_gbuf as sg
 from sciviz_gbuf.errors import InputError
 from sciviz_gbuf.filters import lambert
-from sciviz_gbuf.recipes.illustration import LIGHT
 from sciviz_gbuf.styles.hatch import hatch, stroke_ink, tone_coverage
+from sciviz_gbuf.styles.illustration import LIGHT
 from sciviz_gbuf.styles.lines import COMBOS, line_drawing, modulation, photocopy
 
 SIZE = 160

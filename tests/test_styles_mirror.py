@@ -14,7 +14,7 @@ from conftest import angle_deg, interior, rays_by_hand
 from scipy import ndimage
 from vtkmodules.vtkRenderingCore import vtkCamera
 
-from sciviz_gbuf import capture
+from sciviz_gbuf.core import capture
 from sciviz_gbuf.errors import InputError
 from sciviz_gbuf.filters import profile_edges
 from sciviz_gbuf.styles.mirror import default_style, mirror_enhance, mirror_gbuffers

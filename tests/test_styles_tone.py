@@ -16,10 +16,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import ndimage
 
-from sciviz_gbuf import capture
+from sciviz_gbuf.core import capture
 from sciviz_gbuf.errors import InputError
 from sciviz_gbuf.filters import edge_map, id_edges, internal_edges, profile_edges
-from sciviz_gbuf.recipes.illustration import LIGHT
+from sciviz_gbuf.styles.illustration import LIGHT
 from sciviz_gbuf.styles.local import local_style
 from sciviz_gbuf.styles.tone import gooch, toon
 

@@ -8,7 +8,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .. import _chunks
+from .. import _dask as _chunks
 from ..compose import _colormap_of
 from ..errors import InputError
 from . import _band_kernels as _bk
@@ -196,7 +196,7 @@ def _chunked_bands(heights, mask, vmin, vmax, **params):
     ``vmin``/``vmax`` come first from one reduction pass over the valid heights."""
     import dask.array as da
 
-    from .._chunks import _as_dask
+    from .._dask import _as_dask
 
     z = _as_dask("heights", heights, None)
     valid = da.isfinite(z)

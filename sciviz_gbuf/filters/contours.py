@@ -27,10 +27,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .. import _chunks
+from .. import _dask as _chunks
 from ..errors import InputError
-from . import _contour_ink as _p
-from . import _stencil
+from . import _contour_kernels as _p
+from . import _stencil_kernels as _stencil
 from .operators import _finite, _image, _levels, _mask, _positive
 
 __all__ = ["contour_lines", "hatching"]

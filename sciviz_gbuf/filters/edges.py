@@ -30,8 +30,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..compose import _background
+from ..core.gbuffer import GBuffer, check_gbuffer
 from ..errors import InputError
-from ..gbuffer import GBuffer, check_gbuffer
 from . import _edge_kernels as _k
 
 __all__ = [

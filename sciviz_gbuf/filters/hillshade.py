@@ -12,7 +12,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from .. import _chunks
+from .. import _dask as _chunks
 from ..errors import InputError
 
 __all__ = ["hillshade"]

@@ -23,9 +23,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import _chunks
+from .. import _dask as _chunks
 from ..errors import InputError
-from . import _stencil
+from . import _stencil_kernels as _stencil
 
 __all__ = [
     "c1_discontinuity",
@@ -43,7 +43,7 @@ RADIUS = 1
 
 
 def _chunked(func, arrays: dict, **params):
-    """``func`` chunk by chunk when an input is a dask array (see :mod:`sciviz_gbuf._chunks`)."""
+    """``func`` chunk by chunk when an input is a dask array (see :mod:`sciviz_gbuf._dask`)."""
     return _chunks.map_stencil(func, arrays, halo=RADIUS, **params)
 
 

@@ -20,8 +20,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from ..core.gbuffer import GBuffer, check_gbuffer
 from ..errors import InputError
-from ..gbuffer import GBuffer, check_gbuffer
 from . import _reflection_kernels as _rk
 from .contours import contour_lines
 

@@ -16,7 +16,7 @@ import numpy as np
 from numba import njit, prange
 from scipy import ndimage
 
-from .. import _chunks
+from .. import _dask as _chunks
 from ..errors import InputError
 from .hillshade import check_grid, float32_heights
 

@@ -20,13 +20,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from ._dem_files import (
-    GeoTransform,
-    RawDEM,
-    _blank_nodata,
-    crs_is_geographic,
-    raster_georeference,
-)
+from ._dem_files import GeoTransform, RawDEM, _blank_nodata, crs_is_geographic, raster_georeference
 
 __all__ = ["WindowReader", "read_dem_lazy"]
 

@@ -12,16 +12,15 @@
   and Fig. 11 (a plan-view topographic map of the bundled DEM).
 """
 
-from .birdseye import birdseye_gbuffer, birdseye_layers, birdseye_map, birdseye_panels, sumi_e
-from .contour_figures import (
-    CONTOUR_CAPTIONS,
-    fig5_panels,
-    fig6_panels,
-    fig11_panels,
-    write_panels,
+from ..core.framing import (
+    framed_camera,
+    named_view_camera,
+    oblique_camera,
+    terrain_birdseye_camera,
 )
-from .framing import framed_camera, named_view_camera, oblique_camera, terrain_birdseye_camera
-from .illustration import STYLES, fig7_edge_map, illustrate, shade_image, signed_to_grey
+from ..styles.illustration import STYLES, fig7_edge_map, illustrate, shade_image, signed_to_grey
+from .birdseye import birdseye_gbuffer, birdseye_layers, birdseye_map, birdseye_panels, sumi_e
+from .contour_figures import CONTOUR_CAPTIONS, fig5_panels, fig6_panels, fig11_panels, write_panels
 from .medical import ct_enhance, ct_gbuffer, ct_layers, ct_panels, ct_surface, view_camera
 from .saito1990 import CAPTIONS, fig3_panels, fig7_panels, nut_camera
 from .surface import seam_patches, surface_analysis, surface_gbuffer, surface_layers

@@ -17,12 +17,12 @@ from collections.abc import Sequence
 import numpy as np
 
 from .._progress import progress
-from ..capture import capture
+from ..core.capture import capture
+from ..core.framing import terrain_birdseye_camera
+from ..core.gbuffer import GBuffer
 from ..errors import InputError
 from ..filters import color_bands, contour_lines, lambert, profile_edges
-from ..gbuffer import GBuffer
 from ..readers import DEM
-from .framing import terrain_birdseye_camera
 from .terrain import (
     CONTOUR_COLOR,
     _check_bands,

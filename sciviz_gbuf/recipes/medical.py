@@ -1,7 +1,7 @@
 """Enhanced CT surfaces (Saito & Takahashi 1990 §4.4, Fig. 14).
 
 A CT series is read (:func:`~sciviz_gbuf.readers.read_dicom_series`), cut at a bone or skin
-threshold (:func:`~sciviz_gbuf.isosurface.isosurface`) and rendered once into G-buffers from a
+threshold (:func:`~sciviz_gbuf.core.isosurface`) and rendered once into G-buffers from a
 patient-anatomical view. The enhanced image (b) of Fig. 14 combines four image operations on
 them: profiles (from ``sz``), shading (from the normals), contour lines of one world coordinate
 (heights along the body axis: ``wz``) and colour bands of another (front to back: ``wy``); the
@@ -22,13 +22,13 @@ import numpy as np
 import pyvista as pv
 from matplotlib.colors import LinearSegmentedColormap
 
-from ..capture import capture
+from ..core.capture import capture
+from ..core.framing import framed_camera
+from ..core.gbuffer import GBuffer
+from ..core.isosurface import isosurface
 from ..errors import InputError
 from ..filters import color_bands, contour_lines, lambert, profile_edges
-from ..gbuffer import GBuffer
-from ..isosurface import isosurface
 from .birdseye import _rgba
-from .framing import framed_camera
 from .terrain import _colour, _round_up
 
 __all__ = [
@@ -93,7 +93,7 @@ def view_camera(
         direction from the object towards the eye (then the head, +z, is up unless the view is
         along z, when the face, -y, is).
     view_angle, aspect, margin
-        As in :func:`~sciviz_gbuf.recipes.framing.framed_camera`.
+        As in :func:`~sciviz_gbuf.core.framing.framed_camera`.
     """
     if isinstance(view, str):
         names = [v.strip().lower() for v in view.split("-")]
@@ -138,7 +138,7 @@ def ct_surface(
     """The isosurface of a DICOM folder / file list or of a volume; a surface passes through.
 
     ``series_uid`` and ``resample`` go to :func:`~sciviz_gbuf.readers.read_dicom_series`; the
-    other options to :func:`~sciviz_gbuf.isosurface.isosurface`.
+    other options to :func:`~sciviz_gbuf.core.isosurface`.
     """
     if isinstance(source, pv.PolyData) and source.n_cells > 0 and source.n_lines == 0:
         return source

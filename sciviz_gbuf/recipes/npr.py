@@ -13,13 +13,13 @@ from collections.abc import Sequence
 import numpy as np
 import pyvista as pv
 
-from ..camera import VIEWS
-from ..capture import capture
 from ..compose import to_uint8
+from ..core.camera import VIEWS
+from ..core.capture import capture
+from ..core.framing import named_view_camera
+from ..core.gbuffer import GBuffer
 from ..errors import InputError
-from ..gbuffer import GBuffer
 from ..styles import gooch, hatch, line_drawing, toon
-from .framing import named_view_camera
 
 __all__ = ["MIRROR_CAMERA", "STYLES", "mirror_scene", "npr_image", "with_section_uv"]
 

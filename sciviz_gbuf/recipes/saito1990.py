@@ -16,6 +16,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from ..core.framing import oblique_camera
+from ..core.gbuffer import GBuffer
 from ..filters import (
     edge_map,
     enhance,
@@ -26,9 +28,7 @@ from ..filters import (
     sobel_gradient,
     suppress_zeroth_order,
 )
-from ..gbuffer import GBuffer
-from .framing import oblique_camera
-from .illustration import LIGHT, edges_to_map, shade_image, signed_to_grey
+from ..styles.illustration import LIGHT, edges_to_map, shade_image, signed_to_grey
 
 __all__ = [
     "CAPTIONS",

@@ -16,15 +16,15 @@ from collections.abc import Sequence
 import numpy as np
 import pyvista as pv
 
-from ..camera import VIEWS
-from ..capture import capture
 from ..compose import colorize
+from ..core.camera import VIEWS
+from ..core.capture import capture
+from ..core.framing import named_view_camera
+from ..core.gbuffer import GBuffer
 from ..errors import InputError
 from ..filters import contour_lines, lambert, profile_edges
 from ..filters.reflection import isophotes, reflection_lines
-from ..gbuffer import GBuffer
 from .birdseye import _rgba
-from .framing import named_view_camera
 from .terrain import _round_up
 
 __all__ = [

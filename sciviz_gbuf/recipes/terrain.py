@@ -20,7 +20,7 @@ from collections.abc import Sequence
 import numpy as np
 from numba import njit, prange
 
-from .. import _chunks
+from .. import _dask as _chunks
 from .._progress import progress
 from ..errors import InputError
 from ..filters import _band_kernels as _bk

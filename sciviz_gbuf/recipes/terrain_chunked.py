@@ -1,7 +1,7 @@
 """Plan-view topographic maps of DEMs too large for memory: the map of :mod:`.terrain`, chunk
 by chunk on dask, with the same pixels.
 
-Every layer is an operator with a bounded stencil (:mod:`sciviz_gbuf._chunks`): contour lines
+Every layer is an operator with a bounded stencil (:mod:`sciviz_gbuf._dask`): contour lines
 (1 cell), the relief (GDAL's 3x3 window on a grid whose nodata ring is extrapolated: 1 + 2
 cells), the sky view (its ray length in cells), the colour bands and the composite (the cell
 itself). What needs the whole grid comes first, in one reduction pass over the heights: the
@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import _chunks
+from .. import _dask as _chunks
 from ..errors import InputError
 from ..filters import hillshade
 from ..filters import sky_view as sky_view_factor

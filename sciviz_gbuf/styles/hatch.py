@@ -27,11 +27,11 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from ..core.gbuffer import GBuffer, check_gbuffer
 from ..errors import InputError
 from ..filters import lambert, profile_edges
 from ..filters.operators import _positive
-from ..gbuffer import GBuffer, check_gbuffer
-from ..recipes.illustration import LIGHT
+from .illustration import LIGHT
 
 __all__ = ["SPACES", "hatch", "stroke_ink", "tone_coverage"]
 

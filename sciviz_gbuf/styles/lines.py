@@ -17,11 +17,11 @@ from collections.abc import Sequence
 import numpy as np
 from scipy import ndimage
 
+from ..core.gbuffer import GBuffer, check_gbuffer
 from ..errors import InputError
 from ..filters import hatching, lambert, profile_edges
 from ..filters.operators import _positive
-from ..gbuffer import GBuffer, check_gbuffer
-from ..recipes.illustration import LIGHT
+from .illustration import LIGHT
 
 __all__ = ["COMBOS", "TONE_FULL", "TONE_NONE", "line_drawing", "modulation", "photocopy"]
 

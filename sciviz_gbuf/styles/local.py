@@ -7,8 +7,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from ..core.gbuffer import GBuffer, check_gbuffer
 from ..errors import InputError
-from ..gbuffer import GBuffer, check_gbuffer
 
 __all__ = ["local_style"]
 

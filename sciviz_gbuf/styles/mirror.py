@@ -32,13 +32,13 @@ from collections.abc import Callable, Sequence
 import numpy as np
 import pyvista as pv
 
-from ..camera import CameraInfo
-from ..capture import capture
+from ..core.camera import CameraInfo
+from ..core.capture import capture
+from ..core.gbuffer import GBuffer
+from ..core.scene import make_surface
 from ..errors import InputError
 from ..filters import edge_map, enhance, profile_edges
-from ..gbuffer import GBuffer
-from ..recipes.illustration import shade_image
-from ..scene import make_surface
+from .illustration import shade_image
 
 __all__ = ["MirrorPlane", "default_style", "mirror_enhance", "mirror_gbuffers", "mirror_plane"]
 

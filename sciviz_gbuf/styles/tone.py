@@ -18,10 +18,10 @@ from collections.abc import Iterator, Sequence
 import numpy as np
 
 from ..compose import _background as _rgb
+from ..core.gbuffer import GBuffer, check_gbuffer
 from ..errors import InputError
 from ..filters import edge_map, enhance
-from ..gbuffer import GBuffer, check_gbuffer
-from ..recipes.illustration import LIGHT
+from .illustration import LIGHT
 
 __all__ = ["MAX_LEVELS", "gooch", "toon"]
 
@@ -174,7 +174,7 @@ def gooch(
     Parameters
     ----------
     gb : GBuffer
-    light : 3 floats, default: :data:`~sciviz_gbuf.recipes.illustration.LIGHT`
+    light : 3 floats, default: :data:`~sciviz_gbuf.styles.illustration.LIGHT`
         Eye-space direction towards the light (x right, y up, z towards the viewer).
     base, warm, cool : RGB in [0, 1]
         Object colour ``k_d`` and the blue/yellow tones of the paper (``b``, ``y``).
@@ -352,7 +352,7 @@ def toon(
     Parameters
     ----------
     gb : GBuffer
-    light : 3 floats, default: :data:`~sciviz_gbuf.recipes.illustration.LIGHT`
+    light : 3 floats, default: :data:`~sciviz_gbuf.styles.illustration.LIGHT`
         Eye-space direction towards the light.
     levels : int, sequence of floats or (n, 3) array, default: 3
         The shade texture. An int ``k``: shades ``1/k, 2/k, ..., 1`` times ``base``. A sequence

@@ -25,14 +25,14 @@ from pathlib import Path
 import numpy as np
 import pyvista as pv
 
-from . import styles
-from .capture import _check_window_size, capture
-from .compose import colorize, ids_to_rgb, montage, normals_to_rgb, write_png
-from .datasets import load_frog_skeleton, load_jacksboro_dem, load_jacksboro_terrain, load_nut
-from .filters import lambert
-from .gbuffer import GBuffer
-from .recipes import CAPTIONS as EDGE_CAPTIONS
-from .recipes import (
+from .. import styles
+from ..compose import colorize, ids_to_rgb, montage, normals_to_rgb, write_png
+from ..core.capture import _check_window_size, capture
+from ..core.gbuffer import GBuffer
+from ..datasets import load_frog_skeleton, load_jacksboro_dem, load_jacksboro_terrain, load_nut
+from ..filters import lambert
+from ..recipes import CAPTIONS as EDGE_CAPTIONS
+from ..recipes import (
     CONTOUR_CAPTIONS,
     birdseye_gbuffer,
     birdseye_panels,
@@ -53,8 +53,8 @@ from .recipes import (
     topographic_map,
     write_panels,
 )
-from .recipes.illustration import shade_image
-from .recipes.npr import MIRROR_CAMERA, mirror_scene
+from ..recipes.npr import MIRROR_CAMERA, mirror_scene
+from ..styles.illustration import shade_image
 
 __all__ = ["run_demo", "terrain_birdseye_camera"]
 

@@ -3,7 +3,7 @@
 Every triangle of the scene is drawn in a flat, unlit colour that encodes its index (24 bits
 per render, like VTK's own ``vtkHardwareSelector``). The 8-bit framebuffer then carries an
 exact integer per pixel; all float channels are evaluated afterwards from the geometry itself
-(see :mod:`sciviz_gbuf._kernels`), so they are exact to float precision instead of being
+(see :mod:`sciviz_gbuf.core._capture_kernels`), so they are exact to float precision instead of being
 interpolated 8-bit colours or a non-linear z-buffer.
 """
 
@@ -21,8 +21,8 @@ from vtkmodules.vtkRenderingCore import vtkActor, vtkPolyDataMapper, vtkRenderer
 # The OpenGL2 module registers the render window/mapper factory overrides.
 import vtkmodules.vtkRenderingOpenGL2  # noqa: F401  # isort: skip
 
-from ._kernels import accumulate_codes
-from .errors import RenderError
+from ..errors import RenderError
+from ._capture_kernels import accumulate_codes
 
 __all__ = ["BITS_PER_PASS", "IdRenderer", "new_render_window"]
 

@@ -11,16 +11,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from ..core.gbuffer import GBuffer
 from ..errors import InputError
-from ..filters import (
-    crease_edges,
-    edge_map,
-    enhance,
-    internal_edges,
-    lambert,
-    profile_edges,
-)
-from ..gbuffer import GBuffer
+from ..filters import crease_edges, edge_map, enhance, internal_edges, lambert, profile_edges
 
 __all__ = [
     "LIGHT",

@@ -178,7 +178,7 @@ def named_view_camera(points: np.ndarray, view: str, *, aspect: float = 4 / 3) -
     """PyVista's named view (``"iso"``, ``"xy"``, ... as :func:`~sciviz_gbuf.capture` takes
     them) framed tightly on ``points`` rather than on their bounding sphere, so the object fills
     the picture (VTK's default 30 degree view angle)."""
-    from ..camera import VIEWS
+    from .camera import VIEWS
 
     if view not in VIEWS:
         raise InputError(f"view: expected one of {sorted(VIEWS)}, got {view!r}")

@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from ._contour_ink import hatch_ink, levels_ink, regular_ink
+from ._contour_kernels import hatch_ink, levels_ink, regular_ink
 
 __all__ = ["diag_normal", "run"]
 

@@ -61,7 +61,7 @@ def build_app(explorer, *, port: int = 8080):
     from trame.widgets import html
     from trame.widgets import vuetify3 as v3
 
-    from .explorer import RELIEF_VARIANTS, STYLES, VIEWS, encode_jpeg_data_url
+    from ..apps.explorer import RELIEF_VARIANTS, STYLES, VIEWS, encode_jpeg_data_url
 
     server = get_server(f"sciviz-gbuf-explore-{port}", client_type="vue3")
     state = server.state
@@ -222,8 +222,8 @@ def build_app(explorer, *, port: int = 8080):
 
 
 def _cmd_explore(args: argparse.Namespace) -> int:
-    from .errors import InputError
-    from .explorer import Explorer
+    from ..apps.explorer import Explorer
+    from ..errors import InputError
 
     try:
         import trame  # noqa: F401
@@ -250,7 +250,7 @@ def _cmd_explore(args: argparse.Namespace) -> int:
 
 def add_explore(sub) -> None:
     """Add the ``explore`` sub-command to the ``sciviz-gbuf`` parser."""
-    from .cli import _positive_int, _size
+    from . import _positive_int, _size
 
     p = sub.add_parser(
         "explore",

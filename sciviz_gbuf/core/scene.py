@@ -19,7 +19,7 @@ from vtkmodules.vtkCommonDataModel import vtkDataObject, vtkDataSet, vtkMultiBlo
 from vtkmodules.vtkFiltersCore import vtkPolyDataNormals, vtkTriangleFilter
 from vtkmodules.vtkFiltersGeometry import vtkDataSetSurfaceFilter, vtkGeometryFilter
 
-from .errors import InputError
+from ..errors import InputError
 
 __all__ = ["Surface", "collect_surfaces", "scene_items"]
 

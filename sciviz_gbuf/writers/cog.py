@@ -20,8 +20,8 @@ from typing import Any
 
 import numpy as np
 
-from ._progress import progress
-from .errors import InputError, SciVizGBufError
+from .._progress import progress
+from ..errors import InputError, SciVizGBufError
 
 __all__ = ["local_client", "write_cog"]
 
@@ -268,7 +268,7 @@ def _is_dask(x: object) -> bool:
 def _as_uint8(image: Any):
     """(H, W, C) uint8, C in 1, 3, 4: numpy converted now, dask lazily (per block)."""
     if not _is_dask(image):
-        from .compose import to_uint8
+        from ..compose import to_uint8
 
         a = to_uint8(image)  # checks shape and dtype with write_geotiff's messages
         return a[..., None] if a.ndim == 2 else a
@@ -279,7 +279,7 @@ def _as_uint8(image: Any):
     if image.dtype == np.bool_:
         image = image.astype(np.uint8) * np.uint8(255)
     elif np.issubdtype(image.dtype, np.floating):
-        from .compose import to_uint8
+        from ..compose import to_uint8
 
         image = image.map_blocks(to_uint8, dtype=np.uint8)
     elif image.dtype != np.uint8:
@@ -305,7 +305,7 @@ def _profile(h: int, w: int, c: int, dem: Any, transform: Any, crs: Any) -> dict
     """rasterio profile of the temporary tiled GeoTIFF, georeference checked."""
     from rasterio.transform import Affine
 
-    from .compose import _transform, rasterio_crs
+    from ..compose import _transform, rasterio_crs
 
     if dem is not None and transform is None and crs is None and tuple(dem.shape) != (h, w):
         raise InputError(f"dem: its shape {tuple(dem.shape)} is not the image's {(h, w)}")
@@ -460,7 +460,7 @@ def _overview_png(cog: Path, png: Path, size: int) -> None:
     import rasterio
     from rasterio.enums import Resampling
 
-    from .compose import write_png
+    from ..compose import write_png
 
     with rasterio.open(cog) as src:
         h, w = src.shape

@@ -25,10 +25,10 @@ def _axis(text: str) -> tuple[float, float, float]:
 
 
 def _cmd_patches(args: argparse.Namespace) -> int:
-    from .cli import _png_output, _show_progress
-    from .compose import write_png
-    from .readers.patches import read_patches
-    from .recipes.surface import surface_analysis, surface_gbuffer
+    from ..compose import write_png
+    from ..readers.patches import read_patches
+    from ..recipes.surface import surface_analysis, surface_gbuffer
+    from . import _png_output, _show_progress
 
     out = _png_output(args.output)
     t0 = time.perf_counter()
@@ -60,8 +60,8 @@ def _cmd_patches(args: argparse.Namespace) -> int:
 
 def add_patches(sub) -> None:
     """Add the ``patches`` sub-command to the ``sciviz-gbuf`` parser."""
-    from .cli import _add_progress, _number, _positive_int, _size
-    from .recipes.surface import CURVATURES, MODES
+    from ..recipes.surface import CURVATURES, MODES
+    from . import _add_progress, _number, _positive_int, _size
 
     p = sub.add_parser(
         "patches",

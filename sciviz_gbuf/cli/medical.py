@@ -53,10 +53,10 @@ def _colour(text: str) -> tuple[float, float, float] | None:
 
 
 def _cmd_ct(args: argparse.Namespace) -> int:
-    from .cli import _png_output, _show_progress
-    from .compose import write_png
-    from .readers.dicom import dicom_report, read_dicom_series
-    from .recipes.medical import ct_enhance, ct_gbuffer
+    from ..compose import write_png
+    from ..readers.dicom import dicom_report, read_dicom_series
+    from ..recipes.medical import ct_enhance, ct_gbuffer
+    from . import _png_output, _show_progress
 
     out = _png_output(args.output)
     t0 = time.perf_counter()
@@ -104,8 +104,8 @@ def _cmd_ct(args: argparse.Namespace) -> int:
 
 def add_ct(sub) -> None:
     """Add the ``ct`` sub-command to the ``sciviz-gbuf`` parser."""
-    from .cli import _add_progress, _number, _positive_int, _size
-    from .recipes.medical import LAYOUTS, VIEWS
+    from ..recipes.medical import LAYOUTS, VIEWS
+    from . import _add_progress, _number, _positive_int, _size
 
     p = sub.add_parser(
         "ct",

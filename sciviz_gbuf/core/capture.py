@@ -1,9 +1,9 @@
 """``capture``: one VTK offscreen render of a scene -> float32 G-buffers.
 
 How (a visibility buffer, Burns & Hunt 2013): VTK rasterises the scene once, every triangle
-flat-coloured with its own index (:mod:`sciviz_gbuf._render`). For each covered pixel the ray
+flat-coloured with its own index (:mod:`sciviz_gbuf.core._render`). For each covered pixel the ray
 through the pixel centre is then intersected in float64 with that triangle
-(:mod:`sciviz_gbuf._kernels`), which yields world coordinates, linear depth, Saito's ``sz``
+(:mod:`sciviz_gbuf.core._capture_kernels`), which yields world coordinates, linear depth, Saito's ``sz``
 (1990 Eq. 6), interpolated normals, texture coordinates and scalars, all exact to float32,
 from a single render however many channels are asked for.
 """
@@ -15,11 +15,11 @@ from collections.abc import Sequence
 import numpy as np
 from vtkmodules.vtkRenderingCore import vtkCamera
 
-from . import _kernels
-from ._progress import progress
+from .._progress import progress
+from ..errors import InputError
+from . import _capture_kernels as _kernels
 from ._render import IdRenderer
 from .camera import VIEWS, CameraInfo
-from .errors import InputError
 from .gbuffer import GBuffer
 from .scene import Surface, _is_plotter, collect_surfaces
 

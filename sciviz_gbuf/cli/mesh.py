@@ -20,11 +20,11 @@ def _light(text: str) -> tuple[float, float, float]:
 
 
 def _cmd_mesh(args: argparse.Namespace) -> int:
-    from .capture import capture
-    from .cli import _png_output, _show_progress
-    from .compose import write_png
-    from .readers import read_mesh
-    from .recipes.npr import npr_image
+    from ..compose import write_png
+    from ..core.capture import capture
+    from ..readers import read_mesh
+    from ..recipes.npr import npr_image
+    from . import _png_output, _show_progress
 
     out = _png_output(args.output)
     t0 = time.perf_counter()
@@ -56,9 +56,9 @@ def _cmd_mesh(args: argparse.Namespace) -> int:
 
 def add_mesh(sub) -> None:
     """Add the ``mesh`` sub-command to the ``sciviz-gbuf`` parser."""
-    from .camera import VIEWS
-    from .cli import _add_progress, _positive_int, _size
-    from .recipes.npr import STYLES
+    from ..core.camera import VIEWS
+    from ..recipes.npr import STYLES
+    from . import _add_progress, _positive_int, _size
 
     p = sub.add_parser(
         "mesh",

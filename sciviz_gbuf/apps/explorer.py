@@ -4,7 +4,7 @@
 a DICOM series), a cached :class:`~sciviz_gbuf.GBuffer` and the current parameters.
 :meth:`Explorer.render_image` runs only the image-space filters and styles on the cached
 buffer; only :meth:`Explorer.set_camera` captures again. The web front end (``sciviz-gbuf
-explore``) lives in :mod:`sciviz_gbuf.cli_explore`.
+explore``) lives in :mod:`sciviz_gbuf.cli.explore`.
 """
 
 from __future__ import annotations
@@ -24,22 +24,15 @@ import numpy as np
 import pyvista as pv
 from numba import njit, prange
 
-from .capture import capture
-from .compose import to_uint8
-from .errors import InputError
-from .filters import (
-    color_bands,
-    contour_lines,
-    crease_edges,
-    edge_map,
-    enhance,
-    profile_edges,
-)
-from .gbuffer import GBuffer
-from .readers import DEM
-from .recipes.illustration import fig7_edge_map, illustrate, shade_image
-from .recipes.terrain import CONTOUR_COLOR, composite, contour_intervals, map_layers
-from .styles import gooch, hatch, toon
+from ..compose import to_uint8
+from ..core.capture import capture
+from ..core.gbuffer import GBuffer
+from ..errors import InputError
+from ..filters import color_bands, contour_lines, crease_edges, edge_map, enhance, profile_edges
+from ..readers import DEM
+from ..recipes.terrain import CONTOUR_COLOR, composite, contour_intervals, map_layers
+from ..styles import gooch, hatch, toon
+from ..styles.illustration import fig7_edge_map, illustrate, shade_image
 
 __all__ = [
     "DEM_SUFFIXES",
@@ -217,22 +210,22 @@ def load_scene(path: str | os.PathLike | None) -> tuple[pv.DataSet, str]:
     else a mesh file; ``None`` the bundled machine nut.
     """
     if path is None:
-        from .datasets import load_nut
+        from ..datasets import load_nut
 
         return load_nut(), "mesh"
     p = Path(path)
     if not p.exists():
         raise InputError(f"FILE: no such file or folder {str(p)!r}")
     if p.is_dir():
-        from .readers import read_dicom_series
-        from .recipes.medical import ct_surface
+        from ..readers import read_dicom_series
+        from ..recipes.medical import ct_surface
 
         return ct_surface(read_dicom_series(p)), "dicom"
     if p.suffix.lower() in DEM_SUFFIXES:
-        from .readers import read_dem
+        from ..readers import read_dem
 
         return _dem_surface(read_dem(p)), "dem"
-    from .readers import read_mesh
+    from ..readers import read_mesh
 
     return read_mesh(p), "mesh"
 
@@ -366,7 +359,7 @@ class Explorer:
         """An explorer of a mesh file, DEM or DICOM folder (see :func:`load_scene`)."""
         p = None if path is None else Path(path)
         if p is not None and p.is_file() and p.suffix.lower() in DEM_SUFFIXES:
-            from .readers import read_dem
+            from ..readers import read_dem
 
             dem = read_dem(p)
             return cls(_dem_surface(dem), window_size=tuple(window_size), kind="dem", dem=dem)

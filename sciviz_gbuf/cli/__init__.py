@@ -9,8 +9,8 @@ import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
-from .camera import VIEWS
-from .errors import InputError, SciVizGBufError
+from ..core.camera import VIEWS
+from ..errors import InputError, SciVizGBufError
 
 __all__ = ["main"]
 
@@ -57,7 +57,7 @@ def _positive_int(text: str) -> int:
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
-    from .demo import run_demo
+    from ..apps.demo import run_demo
 
     t0 = time.perf_counter()
     files = run_demo(args.output, window_size=args.size, progress_bar=args.progress)
@@ -72,8 +72,8 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 
 
 def _cmd_capture(args: argparse.Namespace) -> int:
-    from .capture import capture
-    from .readers import read_mesh
+    from ..core.capture import capture
+    from ..readers import read_mesh
 
     meshes = [read_mesh(p) for p in args.mesh]
     g = capture(
@@ -91,11 +91,11 @@ def _cmd_capture(args: argparse.Namespace) -> int:
 
 
 def _cmd_edges(args: argparse.Namespace) -> int:
-    from ._progress import progress
-    from .capture import capture
-    from .compose import write_png
-    from .readers import read_mesh
-    from .recipes import illustrate
+    from .._progress import progress
+    from ..compose import write_png
+    from ..core.capture import capture
+    from ..readers import read_mesh
+    from ..recipes import illustrate
 
     out = Path(args.output)
     if out.suffix.lower() != ".png":
@@ -182,8 +182,8 @@ def _bands(text: str):
 
 
 def _read_terrain(source: str | None):
-    from .datasets import load_jacksboro_dem
-    from .readers import read_dem
+    from ..datasets import load_jacksboro_dem
+    from ..readers import read_dem
 
     return load_jacksboro_dem() if source is None else read_dem(source)
 
@@ -266,10 +266,10 @@ def _topo_paths(args: argparse.Namespace) -> tuple[Path, bool]:
 
 
 def _cmd_topo(args: argparse.Namespace) -> int:
-    from ._progress import progress
-    from .cog import write_cog
-    from .compose import write_geotiff, write_png
-    from .recipes.terrain import topographic_map
+    from .._progress import progress
+    from ..compose import write_geotiff, write_png
+    from ..recipes.terrain import topographic_map
+    from ..writers.cog import write_cog
 
     out, tif = _topo_paths(args)
     source = None if not args.dem else args.dem[0] if len(args.dem) == 1 else list(args.dem)
@@ -299,9 +299,9 @@ def _cmd_topo(args: argparse.Namespace) -> int:
 
 def _topo_out_of_core(args: argparse.Namespace, source, out: Path, show: bool, t0: float) -> int:
     """``--chunks``/``--dask``: lazy DEM -> lazy map -> COG written block by block."""
-    from .cog import local_client, write_cog
-    from .readers import read_dem
-    from .recipes.terrain import topographic_map
+    from ..readers import read_dem
+    from ..recipes.terrain import topographic_map
+    from ..writers.cog import local_client, write_cog
 
     if source is None:
         raise InputError("dem: out of core (--chunks/--dask) needs DEM file(s) to read")
@@ -349,8 +349,8 @@ def _topo_out_of_core(args: argparse.Namespace, source, out: Path, show: bool, t
 
 
 def _cmd_birdseye(args: argparse.Namespace) -> int:
-    from .compose import write_png
-    from .recipes.birdseye import birdseye_gbuffer, birdseye_panels, sumi_e
+    from ..compose import write_png
+    from ..recipes.birdseye import birdseye_gbuffer, birdseye_panels, sumi_e
 
     out = _png_output(args.output)
     t0 = time.perf_counter()
@@ -388,7 +388,7 @@ def _cmd_birdseye(args: argparse.Namespace) -> int:
 
 
 def _cmd_info(args: argparse.Namespace) -> int:
-    from .gbuffer import GBuffer
+    from ..core.gbuffer import GBuffer
 
     g = GBuffer.load(args.file)
     print(repr(g))
@@ -607,7 +607,7 @@ def _add_birdseye(sub) -> None:
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (exposed for documentation and tests)."""
-    from . import __version__
+    from .. import __version__
 
     parser = argparse.ArgumentParser(
         prog="sciviz-gbuf",
@@ -633,7 +633,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--progress", action="store_true", help="show a progress bar")
     p.set_defaults(func=_cmd_capture)
 
-    from .recipes import STYLES
+    from ..recipes import STYLES
 
     p = sub.add_parser(
         "edges",
@@ -687,10 +687,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     _add_topo(sub)
     _add_birdseye(sub)
-    from .cli_explore import add_explore
-    from .cli_medical import add_ct
-    from .cli_mesh import add_mesh
-    from .cli_surface import add_patches
+    from .explore import add_explore
+    from .medical import add_ct
+    from .mesh import add_mesh
+    from .surface import add_patches
 
     add_ct(sub)
     add_patches(sub)

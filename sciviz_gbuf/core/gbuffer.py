@@ -13,9 +13,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ._block_mean import block_mean
+from ..errors import InputError
+from ._block_mean_kernels import block_mean
 from .camera import CameraInfo
-from .errors import InputError
 
 __all__ = ["FORMAT_VERSION", "GBuffer", "check_gbuffer"]
 

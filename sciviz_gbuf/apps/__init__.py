@@ -1,0 +1,1 @@
+"""Applications on top of the recipes: the interactive explorer and the demo."""
