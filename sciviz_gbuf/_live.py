@@ -37,6 +37,7 @@ from vtkmodules.util.numpy_support import numpy_to_vtk
 from vtkmodules.vtkCommonDataModel import vtkImageData
 from vtkmodules.vtkRenderingCore import vtkActor2D, vtkImageMapper, vtkRenderer
 
+from . import _validate
 from .core.capture import capture
 from .core.gbuffer import GBuffer
 from .errors import InputError
@@ -73,23 +74,10 @@ LIVE_STYLES = {
 
 
 def _color(value: object, name: str) -> tuple[float, float, float]:
-    try:
-        rgb = tuple(float(v) for v in value)  # type: ignore[union-attr]
-    except (TypeError, ValueError):
-        rgb = ()
-    if len(rgb) != 3 or not all(0.0 <= v <= 1.0 for v in rgb):
-        raise InputError(f"{name}: expected three floats in [0, 1] (RGB), got {value!r}")
-    return rgb  # type: ignore[return-value]
-
-
-def _positive(value: object, name: str, low: float, high: float = np.inf) -> float:
-    try:
-        v = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        v = np.nan
-    if isinstance(value, bool) or not (low <= v <= high):
-        raise InputError(f"{name}: expected a number in [{low}, {high}], got {value!r}")
-    return v
+    """An RGB triple as Python floats (VTK properties take doubles: no float32 rounding)."""
+    _validate.rgb(value, name)
+    r, g, b = (float(v) for v in np.asarray(value, dtype=np.float64).reshape(-1))
+    return r, g, b
 
 
 @dataclass(frozen=True)
@@ -134,13 +122,13 @@ class EdgeParams:
         return cls(
             style=style,
             operator=operator,
-            crease_angle=_positive(crease_angle, "crease_angle", 1e-6, 180.0),
-            depth_jump=_positive(depth_jump, "depth_jump", 1e-6),
-            width=_positive(width, "width", 1.0, 64.0),
+            crease_angle=_validate.number_in(crease_angle, "crease_angle", 1e-6, 180.0),
+            depth_jump=_validate.number_in(depth_jump, "depth_jump", 1e-6),
+            width=_validate.number_in(width, "width", 1.0, 64.0),
             supersample=int(supersample),
             inner_color=_color(inner_color, "inner_color"),
             profile_color=_color(profile_color, "profile_color"),
-            opacity=_positive(opacity, "opacity", 0.0, 1.0),
+            opacity=_validate.number_in(opacity, "opacity", 0.0, 1.0),
         )
 
 

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import _validate
 from .errors import InputError
 
 __all__ = [
@@ -32,16 +33,6 @@ _LARGE_PNG = 4_000_000
 
 
 # ---------------------------------------------------------------------------- checks
-def _background(background: object, name: str = "background") -> np.ndarray:
-    try:
-        bg = np.asarray(background, dtype=np.float64)
-    except (TypeError, ValueError):
-        bg = None
-    if bg is None or bg.shape != (3,) or not np.all((bg >= 0) & (bg <= 1)):
-        raise InputError(f"{name}: expected an RGB triple of floats in [0, 1], got {background!r}")
-    return bg.astype(np.float32)
-
-
 def _array(values: object, name: str, ndim: int, trailing: tuple[int, ...] = ()) -> np.ndarray:
     a = np.asarray(values)
     if a.ndim != ndim or a.shape[2:] != trailing or a.size == 0:
@@ -60,19 +51,6 @@ def _mask(mask: object, shape: tuple[int, ...]) -> np.ndarray | None:
 
 
 # ---------------------------------------------------------------------------- channels
-def _colormap_of(cmap: str | object, name: str = "cmap"):
-    """A matplotlib colour map from its registered name, or the Colormap itself."""
-    import matplotlib
-
-    try:
-        cm = matplotlib.colormaps[cmap] if isinstance(cmap, str) else cmap
-    except KeyError:
-        raise InputError(f"{name}: unknown colour map {cmap!r}") from None
-    if not callable(cm):
-        raise InputError(f"{name}: expected a colour map name or Colormap, got {cmap!r}")
-    return cm
-
-
 def colorize(
     values: np.ndarray,
     *,
@@ -106,8 +84,8 @@ def colorize(
     if not (np.issubdtype(v.dtype, np.number) or v.dtype == np.bool_) or np.iscomplexobj(v):
         raise InputError(f"values: expected real numbers, got dtype {v.dtype}")
     m = _mask(mask, v.shape)
-    bg = _background(background)
-    cm = _colormap_of(cmap)
+    bg = _validate.rgb(background)
+    cm = _validate.colormap(cmap)
     v = v.astype(np.float64)
     valid = np.isfinite(v) if m is None else np.isfinite(v) & m
     lo, hi = _value_range(v, valid, vmin, vmax)
@@ -158,7 +136,7 @@ def normals_to_rgb(
     if not np.issubdtype(n.dtype, np.floating):
         raise InputError(f"normal: expected floating-point components, got dtype {n.dtype}")
     m = _mask(mask, n.shape[:2])
-    bg = _background(background)
+    bg = _validate.rgb(background)
     valid = np.isfinite(n).all(axis=-1)
     if m is not None:
         valid &= m
@@ -195,7 +173,7 @@ def ids_to_rgb(ids: np.ndarray, *, background: _Colour = (1.0, 1.0, 1.0)) -> np.
     a = _array(ids, "ids", 2)
     if not np.issubdtype(a.dtype, np.integer):
         raise InputError(f"ids: expected an integer array, got dtype {a.dtype}")
-    bg = _background(background)
+    bg = _validate.rgb(background)
     valid = a >= 0
     x = np.where(valid, a, 0).astype(np.uint64)
     # Fold high bits in (a no-op below 2**24, so the bijection holds there); the offset keeps
@@ -435,7 +413,7 @@ def montage(
         raise InputError(f"columns: expected a positive integer, got {columns!r}")
     if isinstance(padding, bool) or not isinstance(padding, (int, np.integer)) or padding < 0:
         raise InputError(f"padding: expected a non-negative integer, got {padding!r}")
-    bg = tuple(int(c) for c in to_uint8(_background(background)[None, None])[0, 0])
+    bg = tuple(int(c) for c in to_uint8(_validate.rgb(background)[None, None])[0, 0])
 
     tile_h = max(t.shape[0] for _, t in tiles)
     tile_w = max(t.shape[1] for _, t in tiles)

@@ -6,6 +6,7 @@ import numpy as np
 import pyvista as pv
 
 from .errors import InputError
+from .readers import metres_per_degree
 
 __all__ = [
     "load_frog_skeleton",
@@ -28,28 +29,6 @@ def load_nut() -> pv.PolyData:
     from pyvista import examples
 
     return examples.load_nut()
-
-
-def metres_per_degree(latitude: float) -> tuple[float, float]:
-    """Lengths of one degree of longitude and of latitude on the WGS84 ellipsoid.
-
-    Uses the standard truncated series for the WGS84 ellipsoid (as tabulated by the U.S.
-    National Geospatial-Intelligence Agency), accurate to about a centimetre per degree.
-
-    Parameters
-    ----------
-    latitude : float
-        Geodetic latitude in degrees.
-
-    Returns
-    -------
-    (float, float)
-        Metres per degree of longitude and per degree of latitude at ``latitude``.
-    """
-    phi = np.radians(latitude)
-    lon = 111412.84 * np.cos(phi) - 93.5 * np.cos(3 * phi) + 0.118 * np.cos(5 * phi)
-    lat = 111132.92 - 559.82 * np.cos(2 * phi) + 1.175 * np.cos(4 * phi) - 0.0023 * np.cos(6 * phi)
-    return float(lon), float(lat)
 
 
 def _jacksboro_npz() -> dict[str, np.ndarray]:

@@ -27,9 +27,11 @@ from numba import njit, prange
 from ..compose import to_uint8
 from ..core.capture import capture
 from ..core.gbuffer import GBuffer
+from ..datasets import load_nut
 from ..errors import InputError
 from ..filters import color_bands, contour_lines, crease_edges, edge_map, enhance, profile_edges
-from ..readers import DEM
+from ..readers import DEM, kind_of, read_dem, read_scene, suffixes
+from ..recipes.medical import ct_surface
 from ..recipes.terrain import CONTOUR_COLOR, composite, contour_intervals, map_layers
 from ..styles import gooch, hatch, toon
 from ..styles.illustration import fig7_edge_map, illustrate, shade_image
@@ -55,8 +57,8 @@ STYLES = {
     "toon": "cartoon shading with black edges",
     "hatch": "pen-and-ink hatching",
 }
-#: File suffixes read as DEMs (everything else but a folder is read as a mesh).
-DEM_SUFFIXES = (".tif", ".tiff", ".asc", ".hgt", ".dem", ".npy", ".npz")
+#: File suffixes read as DEMs (from the readers' one format table).
+DEM_SUFFIXES = suffixes("dem")
 _CONTOUR_COLOR = np.array([0.45, 0.22, 0.05], dtype=np.float32)
 #: Views of a DEM: the plan-view topographic map, or the height field captured in 3-D.
 VIEWS = ("map", "3d")
@@ -206,28 +208,23 @@ def load_scene(path: str | os.PathLike | None) -> tuple[pv.DataSet, str]:
     """The surface to explore and its kind (``"mesh"``, ``"dem"`` or ``"dicom"``).
 
     A folder is a DICOM series (bone surface of :func:`~sciviz_gbuf.recipes.medical.ct_surface`);
-    a file with a suffix of :data:`DEM_SUFFIXES` a DEM (its height field in metres); anything
-    else a mesh file; ``None`` the bundled machine nut.
+    a file with a suffix of :data:`DEM_SUFFIXES` a DEM (its height field in metres), a ``.bpt``
+    file its Bezier patches; anything else a mesh file (see
+    :func:`~sciviz_gbuf.readers.read_scene`); ``None`` the bundled machine nut.
     """
     if path is None:
-        from ..datasets import load_nut
-
         return load_nut(), "mesh"
     p = Path(path)
     if not p.exists():
         raise InputError(f"FILE: no such file or folder {str(p)!r}")
-    if p.is_dir():
-        from ..readers import read_dicom_series
-        from ..recipes.medical import ct_surface
-
-        return ct_surface(read_dicom_series(p)), "dicom"
-    if p.suffix.lower() in DEM_SUFFIXES:
-        from ..readers import read_dem
-
-        return _dem_surface(read_dem(p)), "dem"
-    from ..readers import read_mesh
-
-    return read_mesh(p), "mesh"
+    data, kind = read_scene(p)
+    if kind == "patches":  # a Bezier patch set is explored as its tessellated surface
+        return data.to_mesh(), "mesh"
+    if kind == "dicom":
+        return ct_surface(data), "dicom"
+    if kind == "dem":
+        return _dem_surface(data), "dem"
+    return data, "mesh"
 
 
 def _dem_surface(dem: DEM) -> pv.DataSet:
@@ -358,9 +355,7 @@ class Explorer:
     ) -> Explorer:
         """An explorer of a mesh file, DEM or DICOM folder (see :func:`load_scene`)."""
         p = None if path is None else Path(path)
-        if p is not None and p.is_file() and p.suffix.lower() in DEM_SUFFIXES:
-            from ..readers import read_dem
-
+        if p is not None and p.is_file() and kind_of(p) == "dem":
             dem = read_dem(p)
             return cls(_dem_surface(dem), window_size=tuple(window_size), kind="dem", dem=dem)
         scene, kind = load_scene(path)

@@ -2,9 +2,9 @@
 
 Every triangle of the scene is drawn in a flat, unlit colour that encodes its index (24 bits
 per render, like VTK's own ``vtkHardwareSelector``). The 8-bit framebuffer then carries an
-exact integer per pixel; all float channels are evaluated afterwards from the geometry itself
-(see :mod:`sciviz_gbuf.core._capture_kernels`), so they are exact to float precision instead of being
-interpolated 8-bit colours or a non-linear z-buffer.
+exact integer per pixel; all float channels are evaluated afterwards from the geometry
+itself (see :mod:`sciviz_gbuf.core._capture_kernels`), so they are exact to float precision
+instead of being interpolated 8-bit colours or a non-linear z-buffer.
 """
 
 from __future__ import annotations

@@ -9,10 +9,9 @@ from collections.abc import Sequence
 import numpy as np
 
 from .. import _dask as _chunks
-from ..compose import _colormap_of
+from .. import _validate
 from ..errors import InputError
 from . import _band_kernels as _bk
-from .operators import _finite, _image, _levels, _mask, _positive
 
 __all__ = ["BATHYMETRIC", "HYPSOMETRIC", "color_bands"]
 
@@ -71,9 +70,9 @@ def band_tables(
     ``vmin``/``vmax``; may be empty when both are given)."""
     if interval is not None and levels is not None:
         raise InputError("color_bands: give interval= or levels=, not both")
-    base = _finite(base, "base")
-    land = _lut(HYPSOMETRIC if cmap is None else _colormap_of(cmap, "cmap"))
-    sea = _lut(BATHYMETRIC if sea_cmap is None else _colormap_of(sea_cmap, "sea_cmap"))
+    base = _validate.finite(base, "base")
+    land = _lut(HYPSOMETRIC if cmap is None else _validate.colormap(cmap, "cmap"))
+    sea = _lut(BATHYMETRIC if sea_cmap is None else _validate.colormap(sea_cmap, "sea_cmap"))
     lo = float(data.min()) if vmin is None else float(vmin)
     hi = float(data.max()) if vmax is None else float(vmax)
     if not (np.isfinite(lo) and np.isfinite(hi) and lo <= hi):
@@ -81,9 +80,9 @@ def band_tables(
     lv = mids = np.zeros(1)
     q = 1.0
     if interval is not None:
-        mode, q = _bk.INTERVAL, _positive(interval, "interval")
+        mode, q = _bk.INTERVAL, _validate.positive(interval, "interval")
     elif levels is not None:
-        mode, lv = _bk.LEVELS, _levels(levels)
+        mode, lv = _bk.LEVELS, _validate.levels(levels)
         # Band k lies between edges[k] and edges[k + 1]; the outer bands are as wide as their
         # neighbours (or 1 when there is a single level).
         gap_lo = lv[1] - lv[0] if lv.size > 1 else 1.0
@@ -168,8 +167,8 @@ def color_bands(
         return _chunked_bands(heights, mask, vmin, vmax, **{
             "interval": interval, "levels": levels, "base": base, "cmap": cmap,
             "sea_level": sea_level, "sea_cmap": sea_cmap})  # fmt: skip
-    v = _image(heights, "heights")
-    m = _mask(mask, v.shape)
+    v = _validate.image(heights, "heights")
+    m = _validate.mask(mask, v.shape)
     valid = np.isfinite(v) if m is None else np.isfinite(v) & m
     any_valid = bool(valid.any())
     tables = band_tables(

@@ -14,8 +14,8 @@ from typing import Any, NamedTuple
 import numpy as np
 from skimage import measure
 
+from .. import _validate
 from ..errors import InputError
-from .operators import _finite, _image, _levels, _mask, _positive
 
 __all__ = ["ContourPolyline", "contour_polylines", "polylines_to_geojson"]
 
@@ -89,21 +89,21 @@ def contour_polylines(
     """
     if (interval is None) == (levels is None):
         raise InputError("contour_polylines: give exactly one of interval= or levels=")
-    s = _image(field, "field")
-    m = _mask(mask, s.shape)
+    s = _validate.image(field, "field")
+    m = _validate.mask(mask, s.shape)
     valid = np.isfinite(s) if m is None else np.isfinite(s) & m
     if transform is not None:
         transform = tuple(float(v) for v in transform)
         if len(transform) != 6 or not all(np.isfinite(transform)):
             raise InputError(f"transform: expected 6 finite numbers, got {transform!r}")
-    base = _finite(base, "base")
+    base = _validate.finite(base, "base")
     if not valid.any():
         return []
     if interval is not None:
-        lv = _regular_levels(s[valid], _positive(interval, "interval"), base)
+        lv = _regular_levels(s[valid], _validate.positive(interval, "interval"), base)
     else:
-        lv = _levels(levels)
-    major = None if major_interval is None else _positive(major_interval, "major_interval")
+        lv = _validate.levels(levels)
+    major = None if major_interval is None else _validate.positive(major_interval, "major_interval")
     # find_contours must not see NaN: fill it (the mask keeps the fill out of every line).
     filled = np.where(valid, s, np.float32(s[valid].min()))
     out = []

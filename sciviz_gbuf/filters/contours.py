@@ -28,10 +28,10 @@ from collections.abc import Sequence
 import numpy as np
 
 from .. import _dask as _chunks
+from .. import _validate
 from ..errors import InputError
 from . import _contour_kernels as _p
 from . import _stencil_kernels as _stencil
-from .operators import _finite, _image, _levels, _mask, _positive
 
 __all__ = ["contour_lines", "hatching"]
 
@@ -69,7 +69,7 @@ def _line_shape(d: float, ramp: float) -> tuple[float, float]:
 
 
 def _params(width: float, profile: str) -> np.ndarray:
-    d = _positive(width, "width")
+    d = _validate.positive(width, "width")
     if profile not in _PROFILES:
         raise InputError(f"profile: expected one of {PROFILES}, got {profile!r}")
     ramp, poly = _PROFILES[profile]
@@ -83,14 +83,14 @@ def _params(width: float, profile: str) -> np.ndarray:
 
 
 def _prepare(field, mask, gradient) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
-    s = _image(field, "field")
-    m = _mask(mask, s.shape)
+    s = _validate.image(field, "field")
+    m = _validate.mask(mask, s.shape)
     if gradient is None:
         return s, m, None
     g = np.asarray(gradient)
     if g.shape != s.shape:
         raise InputError(f"gradient: expected shape {s.shape} (like field), got {g.shape}")
-    return s, m, _image(g, "gradient")
+    return s, m, _validate.image(g, "gradient")
 
 
 def _run(code: str, s, m, g, prm: np.ndarray) -> np.ndarray:
@@ -200,7 +200,7 @@ def contour_lines(
     s, m, g = _prepare(field, mask, gradient)
     prm = _params(width, profile)
     d = 1 / prm[_p.INV_D]
-    prm[_p.BASE] = _finite(base, "base")
+    prm[_p.BASE] = _validate.finite(base, "base")
     prm[_p.C_SPARSE] = _unit(c_sparse, "c_sparse")
     if major_interval is not None and interval is None:
         raise InputError("major_interval: needs interval= (regular minor levels)")
@@ -208,18 +208,20 @@ def contour_lines(
         c_dense = 0.0
     if c_dense is not None:
         prm[_p.C_DENSE] = _unit(c_dense, "c_dense")
-        dense = 2 * d if dense_spacing is None else _positive(dense_spacing, "dense_spacing")
+        dense = (
+            2 * d if dense_spacing is None else _validate.positive(dense_spacing, "dense_spacing")
+        )
         prm[_p.DENSE_AT] = dense
     elif dense_spacing is not None:
         raise InputError("dense_spacing: only used with c_dense= (or major_interval=)")
 
     if interval is not None:
-        q = _positive(interval, "interval")
+        q = _validate.positive(interval, "interval")
         prm[_p.Q] = q
         gap = q
         if major_interval is not None:
-            prm[_p.MAJOR_Q] = _positive(major_interval, "major_interval")
-            mw = 2 * d if major_width is None else _positive(major_width, "major_width")
+            prm[_p.MAJOR_Q] = _validate.positive(major_interval, "major_interval")
+            mw = 2 * d if major_width is None else _validate.positive(major_width, "major_width")
             prm[_p.MAJOR_A], prm[_p.MAJOR_CAP] = _line_shape(mw, _PROFILES[profile][0])
         elif major_width is not None:
             raise InputError("major_width: only used with major_interval=")
@@ -228,7 +230,7 @@ def contour_lines(
         if major_interval is not None or major_width is not None:
             raise InputError("major_interval/major_width: need interval=, not levels=")
         # the kernel compares in float32: levels that round together are one level
-        lv = np.unique(_levels(levels).astype(np.float32)).astype(np.float64)
+        lv = np.unique(_validate.levels(levels).astype(np.float32)).astype(np.float64)
         gap = float(np.min(np.diff(lv))) if lv.size > 1 else 0.0
         prm = np.concatenate([prm, lv])
         code = "levels"
@@ -289,9 +291,9 @@ def hatching(
     """
     s, m, g = _prepare(field, mask, gradient)
     prm = _params(width, profile)
-    prm[_p.SPACING] = _positive(spacing, "spacing")
-    prm[_p.Q] = _positive(interval, "interval")
-    prm[_p.BASE] = _finite(base, "base")
+    prm[_p.SPACING] = _validate.positive(spacing, "spacing")
+    prm[_p.Q] = _validate.positive(interval, "interval")
+    prm[_p.BASE] = _validate.finite(base, "base")
     fade = float(transition)
     if not (np.isfinite(fade) and 0 < fade <= 1):
         raise InputError(f"transition: expected a number in (0, 1], got {transition!r}")

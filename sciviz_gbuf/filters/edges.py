@@ -29,7 +29,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..compose import _background
+from .. import _validate
 from ..core.gbuffer import GBuffer, check_gbuffer
 from ..errors import InputError
 from . import _edge_kernels as _k
@@ -345,8 +345,8 @@ def enhance(
         raise InputError(
             f"edge_map: shape {em.shape[:2]} does not match shaded_rgb {img.shape[:2]}"
         )
-    inner_c = _background(inner_color, "inner_color")
-    prof_c = _background(profile_color, "profile_color")
+    inner_c = _validate.rgb(inner_color, "inner_color")
+    prof_c = _validate.rgb(profile_color, "profile_color")
     # The paper (NaN -> 1) and the clip on a fresh float32 copy of the grey or RGB input, then
     # lerp(lerp(base, inner_c, R), prof_c, A) in place: a grey shade is cleaned once, not
     # three times, and no temporary is kept for each step.

@@ -24,6 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import _dask as _chunks
+from .. import _validate
 from ..errors import InputError
 from . import _stencil_kernels as _stencil
 
@@ -47,57 +48,6 @@ def _chunked(func, arrays: dict, **params):
     return _chunks.map_stencil(func, arrays, halo=RADIUS, **params)
 
 
-def _image(image, name: str = "image") -> np.ndarray:
-    a = np.asarray(image)
-    if a.ndim != 2:
-        raise InputError(f"{name}: expected a 2-D (H, W) image, got shape {a.shape}")
-    if not (np.issubdtype(a.dtype, np.floating) or np.issubdtype(a.dtype, np.integer)):
-        raise InputError(f"{name}: expected a real-valued image, got dtype {a.dtype}")
-    if a.size == 0:
-        raise InputError(f"{name}: the image is empty (shape {a.shape})")
-    return np.ascontiguousarray(a, dtype=np.float32)
-
-
-def _mask(mask, shape: tuple[int, ...]) -> np.ndarray | None:
-    if mask is None:
-        return None
-    m = np.asarray(mask)
-    if m.shape != tuple(shape):
-        raise InputError(f"mask: expected a bool array of shape {tuple(shape)}, got {m.shape}")
-    if m.dtype != np.bool_:
-        if not (np.issubdtype(m.dtype, np.integer) or np.issubdtype(m.dtype, np.bool_)):
-            raise InputError(f"mask: expected a bool array, got dtype {m.dtype}")
-        m = m != 0
-    return np.ascontiguousarray(m)
-
-
-def _finite(value, name: str) -> float:
-    v = float(value)
-    if not np.isfinite(v):
-        raise InputError(f"{name}: expected a finite number, got {value!r}")
-    return v
-
-
-def _levels(levels, name: str = "levels") -> np.ndarray:
-    """Sorted, distinct, finite level values as float64 (at least one)."""
-    lv = np.asarray(levels, dtype=np.float64).ravel()
-    if lv.size == 0:
-        raise InputError(f"{name}: expected at least one level value")
-    if not np.all(np.isfinite(lv)):
-        raise InputError(f"{name}: expected finite values, got {lv.tolist()}")
-    return np.unique(lv)
-
-
-def _positive(value, name: str) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{name}: expected a finite number > 0, got {value!r}") from None
-    if not (np.isfinite(v) and v > 0):
-        raise InputError(f"{name}: expected a finite number > 0, got {value!r}")
-    return v
-
-
 def sobel_gradient(image: np.ndarray, *, mask: np.ndarray | None = None) -> np.ndarray:
     """Sobel gradient magnitude ``g`` per pixel (1990 Eq. 1).
 
@@ -117,8 +67,8 @@ def sobel_gradient(image: np.ndarray, *, mask: np.ndarray | None = None) -> np.n
     """
     if _chunks.any_dask(image, mask):
         return _chunked(sobel_gradient, {"image": image, "mask": mask})
-    img = _image(image)
-    return _stencil.run("sobel", img, _mask(mask, img.shape))
+    img = _validate.image(image)
+    return _stencil.run("sobel", img, _validate.mask(mask, img.shape))
 
 
 def second_order(image: np.ndarray, *, mask: np.ndarray | None = None) -> np.ndarray:
@@ -133,8 +83,8 @@ def second_order(image: np.ndarray, *, mask: np.ndarray | None = None) -> np.nda
     """
     if _chunks.any_dask(image, mask):
         return _chunked(second_order, {"image": image, "mask": mask})
-    img = _image(image)
-    return _stencil.run("second", img, _mask(mask, img.shape))
+    img = _validate.image(image)
+    return _stencil.run("second", img, _validate.mask(mask, img.shape))
 
 
 def normalize_gradient(
@@ -161,9 +111,9 @@ def normalize_gradient(
     """
     if _chunks.any_dask(gradient, mask):
         return _chunked(normalize_gradient, {"gradient": gradient, "mask": mask}, k_g=k_g)
-    g = _image(gradient, "gradient")
-    k = _positive(k_g, "k_g")
-    return _stencil.run("normalize", g, _mask(mask, g.shape), k)
+    g = _validate.image(gradient, "gradient")
+    k = _validate.positive(k_g, "k_g")
+    return _stencil.run("normalize", g, _validate.mask(mask, g.shape), k)
 
 
 def suppress_zeroth_order(
@@ -198,12 +148,12 @@ def suppress_zeroth_order(
             {"second": second, "gradient": gradient, "mask": mask},
             k_l=k_l,
         )
-    lap = _image(second, "second")
-    g = _image(gradient, "gradient")
+    lap = _validate.image(second, "second")
+    g = _validate.image(gradient, "gradient")
     if g.shape != lap.shape:
         raise InputError(f"gradient: expected shape {lap.shape} (like second), got {g.shape}")
-    k = _positive(k_l, "k_l")
-    return _stencil.run("suppress", g, _mask(mask, g.shape), k, aux=lap)
+    k = _validate.positive(k_l, "k_l")
+    return _stencil.run("suppress", g, _validate.mask(mask, g.shape), k, aux=lap)
 
 
 def c1_discontinuity(image: np.ndarray, *, mask: np.ndarray | None = None) -> np.ndarray:
@@ -218,8 +168,8 @@ def c1_discontinuity(image: np.ndarray, *, mask: np.ndarray | None = None) -> np
     """
     if _chunks.any_dask(image, mask):
         return _chunked(c1_discontinuity, {"image": image, "mask": mask})
-    img = _image(image)
-    return _stencil.run("c1", img, _mask(mask, img.shape))
+    img = _validate.image(image)
+    return _stencil.run("c1", img, _validate.mask(mask, img.shape))
 
 
 def diagonal_depth_discontinuity(
@@ -237,8 +187,8 @@ def diagonal_depth_discontinuity(
     """
     if _chunks.any_dask(depth, mask):
         return _chunked(diagonal_depth_discontinuity, {"depth": depth, "mask": mask})
-    img = _image(depth, "depth")
-    return _stencil.run("diag_depth", img, _mask(mask, img.shape))
+    img = _validate.image(depth, "depth")
+    return _stencil.run("diag_depth", img, _validate.mask(mask, img.shape))
 
 
 def diagonal_normal_discontinuity(
@@ -265,7 +215,7 @@ def diagonal_normal_discontinuity(
     if not np.issubdtype(n.dtype, np.floating):
         raise InputError(f"normal: expected a float array, got dtype {n.dtype}")
     n = np.ascontiguousarray(n, dtype=np.float32)
-    m = _mask(mask, n.shape[:2])
+    m = _validate.mask(mask, n.shape[:2])
     out = np.empty(n.shape[:2], dtype=np.float32)
     _stencil.diag_normal(n, m if m is not None else np.ones((1, n.shape[1]), np.bool_), out)
     return out

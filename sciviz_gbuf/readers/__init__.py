@@ -1,16 +1,30 @@
-"""Readers: mesh files -> PyVista datasets; DEM grids -> DEM; DICOM; Bezier patch sets."""
+"""Readers: mesh files -> PyVista datasets; DEM grids -> DEM; DICOM; Bezier patch sets.
 
+:data:`~sciviz_gbuf.readers.formats.FORMATS` is the one suffix table; :func:`read_scene` reads
+any path by it.
+"""
+
+from ._dem_model import metres_per_degree
 from .dem import DEM, read_dem
 from .dicom import dicom_report, read_dicom_series
+from .formats import FORMATS, KINDS, Format, kind_of, suffixes
 from .mesh import read_mesh
 from .patches import PatchSet, read_patches
+from .read import read_scene
 
 __all__ = [
     "DEM",
+    "FORMATS",
+    "KINDS",
+    "Format",
     "PatchSet",
     "dicom_report",
+    "kind_of",
+    "metres_per_degree",
     "read_dem",
     "read_dicom_series",
     "read_mesh",
     "read_patches",
+    "read_scene",
+    "suffixes",
 ]

@@ -16,7 +16,18 @@ import numpy as np
 
 from ..errors import InputError
 
-__all__ = ["RawDEM", "read_asc", "read_geotiff", "read_hgt", "read_npz", "read_usgs_dem"]
+__all__ = [
+    "RawDEM",
+    "blank_nodata",
+    "crs_is_geographic",
+    "raster_georeference",
+    "read_asc",
+    "read_geotiff",
+    "read_hgt",
+    "read_npy",
+    "read_npz",
+    "read_usgs_dem",
+]
 
 GeoTransform = tuple[float, float, float, float, float, float]
 
@@ -38,7 +49,7 @@ class RawDEM:
     unit_metres: float = 1.0
 
 
-def _blank_nodata(values: np.ndarray, nodata: float | None, *, owned: bool = False) -> np.ndarray:
+def blank_nodata(values: np.ndarray, nodata: float | None, *, owned: bool = False) -> np.ndarray:
     """Float32 ``values`` with NaN where they equal ``nodata``: a copy, or ``values`` itself
     changed in place when ``owned`` (a fresh array of this reader) and already float32."""
     values = np.asarray(values)
@@ -113,7 +124,7 @@ def read_asc(path: Path) -> RawDEM:
             f"{path}: header says nrows={nrows} x ncols={ncols} = {nrows * ncols} values, "
             f"the file holds {values.size} ({values.size / max(ncols, 1):.6g} rows of {ncols})"
         )
-    heights = _blank_nodata(values.reshape(nrows, ncols), nodata)
+    heights = blank_nodata(values.reshape(nrows, ncols), nodata)
     transform = (x0, dx, 0.0, y0 + nrows * dy, 0.0, -dy)  # rows run north to south
     prj = path.with_suffix(".prj")
     crs = (prj.read_text(encoding="latin-1").strip() or None) if prj.is_file() else None
@@ -140,7 +151,12 @@ def read_hgt(path: Path) -> RawDEM:
     values = np.fromfile(path, dtype=">i2").reshape(n, n)
     d = 1.0 / (n - 1)  # edge samples are centred on whole degrees: half a pixel outside
     transform = (lon - d / 2, d, 0.0, lat + 1 + d / 2, 0.0, -d)
-    return RawDEM(_blank_nodata(values, HGT_VOID), transform, "EPSG:4326", True)
+    return RawDEM(blank_nodata(values, HGT_VOID), transform, "EPSG:4326", True)
+
+
+def read_npy(path: Path) -> RawDEM:
+    """A ``.npy`` file holding one 2-D array of heights (no georeference; pickles refused)."""
+    return RawDEM(np.load(path, allow_pickle=False))
 
 
 def read_npz(path: Path) -> RawDEM:
@@ -204,7 +220,7 @@ def read_geotiff(path: Path) -> RawDEM:
             UserWarning,
             stacklevel=3,
         )
-    heights = _blank_nodata(values, nodata, owned=True)
+    heights = blank_nodata(values, nodata, owned=True)
     return RawDEM(heights, tuple(map(float, transform)) if transform else None, crs, geographic)
 
 

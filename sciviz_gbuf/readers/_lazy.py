@@ -20,12 +20,21 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from ._dem_files import GeoTransform, RawDEM, _blank_nodata, crs_is_geographic, raster_georeference
+from ._dem_files import GeoTransform, RawDEM, blank_nodata, crs_is_geographic, raster_georeference
+from ._dem_model import (
+    DEM,
+    clean_heights,
+    dem_meta,
+    georeference,
+    is_dataarray,
+    is_path_list,
+    read_dataarray,
+)
+from .formats import FORMATS
 
-__all__ = ["WindowReader", "read_dem_lazy"]
+__all__ = ["WindowReader", "chunk_dem", "parse_chunks", "read_dem_lazy", "reads_lazily"]
 
 #: Formats without windowed reads (or read by our own parser, not GDAL): read whole, then chunked.
-_IN_MEMORY_SUFFIXES = (".npy", ".npz", ".dem")
 #: Open datasets kept per thread; a mosaic chunk touches a few tiles, so a small LRU suffices.
 _CACHE_SIZE = 16
 _local = threading.local()
@@ -104,8 +113,6 @@ class WindowReader:
         self.dtype, self.ndim = np.dtype(np.float32), 2
 
     def __getitem__(self, key: tuple[slice, slice]) -> np.ndarray:
-        from .dem import _heights
-
         (r0, r1, _), (c0, c1, _) = (k.indices(n) for k, n in zip(key, self.shape, strict=True))
         single = len(self.tiles) == 1
         out = None if single else np.full((r1 - r0, c1 - c0), np.nan, np.float32)
@@ -118,7 +125,7 @@ class WindowReader:
                 t.path, tr0 - t.row_off, tc0 - t.col_off, tr1 - tr0, tc1 - tc0, t.stamp
             )
             # The in-memory steps: file nodata (compared in the file's dtype), then nodata=.
-            h = _heights(_blank_nodata(raw, t.nodata, owned=True), self.name, self.nodata, True)
+            h = clean_heights(blank_nodata(raw, t.nodata, owned=True), self.name, self.nodata, True)
             if single:
                 return h
             # Tiles sharing edge cells (SRTM) agree there; a void in one is filled by another.
@@ -234,16 +241,10 @@ def read_dem_lazy(
     """:func:`~sciviz_gbuf.readers.read_dem` with dask heights (see its ``chunks``)."""
     import dask.array as da
 
-    from .dem import DEM, _georeference, _is_dataarray, _is_path_list, _read_dataarray
-    from .dem import read_dem as read_in_memory
-
     dchunks = "auto" if chunks is None else parse_chunks(chunks)
-    options = {"spacing": spacing, "nodata": nodata, "transform": transform, "crs": crs}
-    if _is_path_list(source) or isinstance(source, (str, os.PathLike)):
-        paths = [Path(p) for p in (source if _is_path_list(source) else [source])]
-        if len(paths) == 1 and paths[0].suffix.lower() in _IN_MEMORY_SUFFIXES:
-            return _chunked(read_in_memory(paths[0], geographic=geographic, **options), dchunks)
-        bad = [p for p in paths if p.suffix.lower() in _IN_MEMORY_SUFFIXES]
+    if is_path_list(source) or isinstance(source, (str, os.PathLike)):
+        paths = [Path(p) for p in (source if is_path_list(source) else [source])]
+        bad = [p for p in paths if not _windowed(p)]
         if bad:
             raise InputError(
                 f"{bad[0]}: mosaic tiles must be rasters GDAL reads, not {bad[0].suffix}"
@@ -283,15 +284,15 @@ def read_dem_lazy(
             meta=np.empty((0, 0), np.float32),
             asarray=False,
         )
-        geo = _georeference(raw, shape, name, spacing=spacing, geographic=geographic)
+        geo = georeference(raw, shape, name, spacing=spacing, geographic=geographic)
         return DEM(heights, da.isfinite(heights), raw.crs, *geo, name)
-    if _is_dataarray(source) and _is_dask(getattr(source, "data", None)):
+    if is_dataarray(source) and _is_dask(getattr(source, "data", None)):
         name = f"DataArray {getattr(source, 'name', None)!r}"
         if transform is not None or crs is not None:
             raise InputError(f"{name}: transform=/crs= are for sources without a georeference")
         if spacing is not None:
             raise InputError(f"{name}: spacing= is for sources without a georeference")
-        raw, da_nodata = _read_dataarray(source, name, lazy=True)
+        raw, da_nodata = read_dataarray(source, name, lazy=True)
         values = raw.heights
         if min(values.shape) == 0:
             raise InputError(f"{name}: expected a non-empty 2-D array, got shape {values.shape}")
@@ -307,32 +308,43 @@ def read_dem_lazy(
         )
         if chunks is not None:
             heights = heights.rechunk(dchunks)
-        geo = _georeference(raw, heights.shape, name, spacing=None, geographic=geographic)
+        geo = georeference(raw, heights.shape, name, spacing=None, geographic=geographic)
         return DEM(heights, da.isfinite(heights), raw.crs, *geo, name)
-    # Arrays and in-memory DataArrays: nothing to read lazily.
-    dem = read_in_memory(source, geographic=geographic, **options)
-    return _chunked(dem, dchunks)
+    raise InputError(f"{type(source).__name__}: nothing to read lazily (see reads_lazily)")
+
+
+def _windowed(path: Path) -> bool:
+    """GDAL reads it in windows: a listed windowed format, or any raster not listed (VRT...)."""
+    fmt = FORMATS.get(path.suffix.lower())
+    return fmt is None or fmt.windowed
+
+
+def reads_lazily(source: Any) -> bool:
+    """Whether :func:`read_dem_lazy` reads ``source`` by windows or blocks: tile lists, files
+    GDAL reads in windows, dask-backed DataArrays. Arrays, in-memory DataArrays and files
+    parsed whole (``.npy``, ``.npz``, ``.dem``) are read into memory, then chunked."""
+    if is_path_list(source):
+        return True
+    if isinstance(source, (str, os.PathLike)):
+        return _windowed(Path(source))
+    return is_dataarray(source) and _is_dask(getattr(source, "data", None))
 
 
 def _dataarray_block(
     values: np.ndarray, da_nodata: float | None, nodata: float | None, name: str
 ) -> np.ndarray:
     """One block of a dask DataArray through read_dem's in-memory nodata steps."""
-    from .dem import _heights
-
     if da_nodata is not None:
         values = np.where(values == da_nodata, np.nan, values)
-    return _heights(np.asarray(values), name, nodata)
+    return clean_heights(np.asarray(values), name, nodata)
 
 
-def _chunked(dem, chunks: tuple[int, int] | str):
+def chunk_dem(dem, chunks: tuple[int, int] | str):
     """An in-memory DEM with its heights wrapped as a dask array of ``chunks``."""
     import dask.array as da
 
-    from .dem import DEM, _meta
-
     heights = da.from_array(dem.heights, chunks=chunks)
-    return DEM(heights, da.isfinite(heights), *_meta(dem))
+    return DEM(heights, da.isfinite(heights), *dem_meta(dem))
 
 
 def _is_dask(x: object) -> bool:

@@ -16,6 +16,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from .. import _validate
 from .._progress import progress
 from ..core.capture import capture
 from ..core.framing import terrain_birdseye_camera
@@ -26,7 +27,6 @@ from ..readers import DEM
 from .terrain import (
     CONTOUR_COLOR,
     _check_bands,
-    _colour,
     as_dem,
     contour_intervals,
     lit,
@@ -216,7 +216,7 @@ def _rgba(rgb: np.ndarray, alpha: np.ndarray, background) -> np.ndarray:
         rgb = np.repeat(rgb[..., None], 3, axis=2)
     a = np.clip(alpha, 0.0, 1.0)[..., None]
     if background is not None:
-        bg = _colour(background, "background")
+        bg = _validate.rgb(background, "background")
         rgb, a = rgb * a + bg * (1.0 - a), np.ones_like(a)
     out = np.empty((*rgb.shape[:2], 4), dtype=np.uint8)
     out[..., :3] = np.rint(rgb * 255.0)
@@ -236,7 +236,7 @@ def birdseye_panels(
     plus ``sh`` (see :func:`birdseye_map` for the parameters)."""
     gb = _gbuffer_of(dem_or_gbuffer, **(capture_options or {}))
     lay = birdseye_layers(gb, **layer_options)
-    colour = _colour(contour_color, "contour_color")
+    colour = _validate.rgb(contour_color, "contour_color")
     alt = float(layer_options.get("altitude", 45.0))
     flat = np.float32(max(np.sin(np.radians(alt)), 1e-3))
     coloured = lit(lay["bands"], relief_light(lay["sh"] / flat))

@@ -22,6 +22,7 @@ import numpy as np
 import pyvista as pv
 from matplotlib.colors import LinearSegmentedColormap
 
+from .. import _validate
 from ..core.capture import capture
 from ..core.framing import framed_camera
 from ..core.gbuffer import GBuffer
@@ -29,7 +30,7 @@ from ..core.isosurface import isosurface
 from ..errors import InputError
 from ..filters import color_bands, contour_lines, lambert, profile_edges
 from .birdseye import _rgba
-from .terrain import _colour, _round_up
+from .terrain import _round_up
 
 __all__ = [
     "BONE",
@@ -371,7 +372,7 @@ def ct_panels(
         raise InputError(f"keys: expected some of {PANELS}, got {keys!r}")
     gb = source if isinstance(source, GBuffer) else ct_gbuffer(source, **gbuffer_options)
     lay = ct_layers(gb, **(layer_options or {}))
-    colour = _colour(contour_color, "contour_color")
+    colour = _validate.rgb(contour_color, "contour_color")
     sh = lay["sh"][..., None]
     cn, pr = lay["cn"][..., None], lay["pr"][..., None]
     lit_bands = lay["bands"] * (0.3 + 0.7 * sh)
@@ -475,6 +476,6 @@ def ct_enhance(
     a, b = panels["shaded"], panels["enhanced"]
     gap = np.zeros((a.shape[0], max(1, a.shape[1] // 32), 4), dtype=np.uint8)
     if background is not None:
-        gap[..., :3] = np.rint(_colour(background, "background") * 255.0)
+        gap[..., :3] = np.rint(_validate.rgb(background, "background") * 255.0)
         gap[..., 3] = 255
     return np.concatenate([a, gap, b], axis=1)

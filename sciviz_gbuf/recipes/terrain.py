@@ -21,6 +21,7 @@ import numpy as np
 from numba import njit, prange
 
 from .. import _dask as _chunks
+from .. import _validate
 from .._progress import progress
 from ..errors import InputError
 from ..filters import _band_kernels as _bk
@@ -239,13 +240,6 @@ def _check_bands(bands, major: float):
     if levels.size == 0 or not np.isfinite(levels).all():
         raise InputError(f"bands: expected finite band edges, got {bands!r}")
     return {"levels": levels}
-
-
-def _colour(value: Sequence[float], name: str) -> np.ndarray:
-    c = np.asarray(value, dtype=np.float32).reshape(-1)
-    if c.size != 3 or not np.all((c >= 0) & (c <= 1)):
-        raise InputError(f"{name}: expected an RGB triple in [0, 1], got {value!r}")
-    return c
 
 
 def map_layers(
@@ -475,7 +469,7 @@ def topographic_map(
     InputError
         For anything :func:`read_dem` rejects, or an invalid parameter.
     """
-    colour = _colour(contour_color, "contour_color")
+    colour = _validate.rgb(contour_color, "contour_color")
     d = as_dem(dem)
     if _chunks.is_dask(d.heights):
         from .terrain_chunked import lazy_topographic_map

@@ -27,10 +27,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from .. import _validate
 from ..core.gbuffer import GBuffer, check_gbuffer
 from ..errors import InputError
 from ..filters import lambert, profile_edges
-from ..filters.operators import _positive
 from .illustration import LIGHT
 
 __all__ = ["SPACES", "hatch", "stroke_ink", "tone_coverage"]
@@ -39,16 +39,6 @@ __all__ = ["SPACES", "hatch", "stroke_ink", "tone_coverage"]
 SPACES = ("screen", "uv")
 # More families than this do not darken anything further and only cost time.
 _MAX_FAMILIES = 16
-
-
-def _color(value, name: str) -> np.ndarray:
-    try:
-        c = np.asarray(value, dtype=np.float64).reshape(-1)
-    except (TypeError, ValueError):
-        raise InputError(f"{name}: expected 3 floats in [0, 1], got {value!r}") from None
-    if c.size != 3 or not np.all(np.isfinite(c)) or c.min() < 0 or c.max() > 1:
-        raise InputError(f"{name}: expected 3 floats in [0, 1], got {value!r}")
-    return c.astype(np.float32)
 
 
 def _angles(value) -> np.ndarray:
@@ -231,16 +221,18 @@ def hatch(
     if space not in SPACES:
         raise InputError(f"space: expected one of {SPACES}, got {space!r}")
     k = gb.supersample
-    sp = _positive(spacing, "spacing") * k  # buffer pixels: the strokes are drawn supersampled
+    sp = (
+        _validate.positive(spacing, "spacing") * k
+    )  # buffer pixels: the strokes are drawn supersampled
     theta = _angles(angles)
-    cap_w = None if max_width is None else _positive(max_width, "max_width") * k
-    scale = None if uv_scale is None else _positive(uv_scale, "uv_scale")
+    cap_w = None if max_width is None else _validate.positive(max_width, "max_width") * k
+    scale = None if uv_scale is None else _validate.positive(uv_scale, "uv_scale")
     if uv_scale is not None and space != "uv":
         raise InputError("uv_scale: only used with space='uv'")
-    pw = _positive(profile_width, "profile_width")
+    pw = _validate.positive(profile_width, "profile_width")
     if pw < 1:
         raise InputError(f"profile_width: expected a width >= 1 pixel, got {profile_width!r}")
-    ink_c, paper_c = _color(ink, "ink"), _color(paper, "paper")
+    ink_c, paper_c = _validate.rgb(ink, "ink"), _validate.rgb(paper, "paper")
     if space == "uv" and gb.uv is None:
         raise InputError("space: 'uv' needs texture coordinates, but gb.uv is None")
 

@@ -17,10 +17,10 @@ from collections.abc import Sequence
 import numpy as np
 from scipy import ndimage
 
+from .. import _validate
 from ..core.gbuffer import GBuffer, check_gbuffer
 from ..errors import InputError
 from ..filters import hatching, lambert, profile_edges
-from ..filters.operators import _positive
 from .illustration import LIGHT
 
 __all__ = ["COMBOS", "TONE_FULL", "TONE_NONE", "line_drawing", "modulation", "photocopy"]
@@ -113,9 +113,9 @@ def line_drawing(
     check_gbuffer(gb)
     if combo not in COMBOS:
         raise InputError(f"combo: expected one of {sorted(COMBOS)}, got {combo!r}")
-    sp = _positive(spacing, "spacing")
-    wd = _positive(width, "width")
-    pw = _positive(profile_width, "profile_width")
+    sp = _validate.positive(spacing, "spacing")
+    wd = _validate.positive(width, "width")
+    pw = _validate.positive(profile_width, "profile_width")
     if pw < 1:
         raise InputError(f"profile_width: expected a width >= 1 pixel, got {profile_width!r}")
     needs_uv = "u" in combo or "v" in combo

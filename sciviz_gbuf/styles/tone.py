@@ -17,7 +17,7 @@ from collections.abc import Iterator, Sequence
 
 import numpy as np
 
-from ..compose import _background as _rgb
+from .. import _validate
 from ..core.gbuffer import GBuffer, check_gbuffer
 from ..errors import InputError
 from ..filters import edge_map, enhance
@@ -37,22 +37,6 @@ def _unit_light(light: object) -> np.ndarray:
     if lv.size != 3 or not np.isfinite(lv).all() or not np.linalg.norm(lv) > 0:
         raise InputError(f"light: expected a finite non-zero 3-vector (eye space), got {light!r}")
     return (lv / np.linalg.norm(lv)).astype(np.float32)
-
-
-def _unit_interval(value: object, name: str) -> float:
-    try:
-        v = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        v = float("nan")
-    if isinstance(value, bool) or not 0.0 <= v <= 1.0:
-        raise InputError(f"{name}: expected a number in [0, 1], got {value!r}")
-    return v
-
-
-def _check_bool(value: object, name: str) -> bool:
-    if not isinstance(value, (bool, np.bool_)):
-        raise InputError(f"{name}: expected True or False, got {value!r}")
-    return bool(value)
 
 
 def _n_dot_l(gb: GBuffer, light: np.ndarray) -> np.ndarray:
@@ -195,12 +179,19 @@ def gooch(
     """
     gb = check_gbuffer(gb)
     lv = _unit_light(light)
-    base_c, warm_c, cool_c = _rgb(base, "base"), _rgb(warm, "warm"), _rgb(cool, "cool")
-    a = np.float32(_unit_interval(alpha, "alpha"))
-    b = np.float32(_unit_interval(beta, "beta"))
-    inner_c, prof_c = _rgb(inner_color, "inner_color"), _rgb(profile_color, "profile_color")
-    bg = _rgb(background, "background")
-    edges = _check_bool(edges, "edges")
+    base_c, warm_c, cool_c = (
+        _validate.rgb(base, "base"),
+        _validate.rgb(warm, "warm"),
+        _validate.rgb(cool, "cool"),
+    )
+    a = np.float32(_validate.unit_interval(alpha, "alpha"))
+    b = np.float32(_validate.unit_interval(beta, "beta"))
+    inner_c, prof_c = (
+        _validate.rgb(inner_color, "inner_color"),
+        _validate.rgb(profile_color, "profile_color"),
+    )
+    bg = _validate.rgb(background, "background")
+    edges = _validate.boolean(edges, "edges")
 
     k_cool = cool_c + a * base_c
     k_warm = warm_c + b * base_c
@@ -378,17 +369,17 @@ def toon(
     """
     gb = check_gbuffer(gb)
     lv = _unit_light(light)
-    table = _shade_table(levels, _rgb(base, "base"))
+    table = _shade_table(levels, _validate.rgb(base, "base"))
     try:
         sm = float(smooth)
     except (TypeError, ValueError):
         sm = float("nan")
     if isinstance(smooth, bool) or not 0.0 <= sm <= 1.0:
         raise InputError(f"smooth: expected a width in units of N.L in [0, 1], got {smooth!r}")
-    inner_c = None if inner_color is None else _rgb(inner_color, "inner_color")
-    prof_c = _rgb(profile_color, "profile_color")
-    bg = _rgb(background, "background")
-    edges = _check_bool(edges, "edges")
+    inner_c = None if inner_color is None else _validate.rgb(inner_color, "inner_color")
+    prof_c = _validate.rgb(profile_color, "profile_color")
+    bg = _validate.rgb(background, "background")
+    edges = _validate.boolean(edges, "edges")
 
     rgb = _finish(gb, _toon_colour(gb, lv, table, sm, bg))
     if not edges:

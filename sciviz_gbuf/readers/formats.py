@@ -1,0 +1,81 @@
+"""The one table of file formats the readers know: suffix -> kind of data and how it is read.
+
+Every place that decides what a file is asks this table (:func:`kind_of`, :func:`suffixes`):
+``read_dem`` for its in-memory parsers and for which files GDAL reads in windows,
+``read_scene`` and the explorer for what a path holds. Adding a format is one line here
+(plus its parser). A suffix that is not listed is a mesh for PyVista/VTK's own readers, and a
+folder is a DICOM series.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from ._dem_files import (
+    RawDEM,
+    read_asc,
+    read_geotiff,
+    read_hgt,
+    read_npy,
+    read_npz,
+    read_usgs_dem,
+)
+
+__all__ = ["FORMATS", "KINDS", "Format", "kind_of", "suffixes"]
+
+#: What a path can hold: a DEM grid, a surface/volume mesh, Bezier patches, a DICOM series.
+KINDS = ("dem", "mesh", "patches", "dicom")
+
+
+@dataclass(frozen=True)
+class Format:
+    """One file format.
+
+    Attributes
+    ----------
+    kind : str
+        One of :data:`KINDS`.
+    description : str
+        What the format is, for messages and ``--help``.
+    read_raw : callable or None
+        For DEM formats: ``Path -> RawDEM`` (heights and georeference as the file gives them).
+    windowed : bool
+        True if GDAL (rasterio) reads it in windows, so ``read_dem(chunks=)`` is lazy and it
+        can be a tile of a mosaic; False if it is parsed whole in memory.
+    """
+
+    kind: str
+    description: str
+    read_raw: Callable[[Path], RawDEM] | None = None
+    windowed: bool = False
+
+
+#: suffix (lower case, with the dot) -> :class:`Format`.
+FORMATS: dict[str, Format] = {
+    ".asc": Format("dem", "ESRI ASCII grid", read_asc, windowed=True),
+    ".dem": Format("dem", "USGS DEM", read_usgs_dem),
+    ".hgt": Format("dem", "SRTM HGT tile", read_hgt, windowed=True),
+    ".npy": Format("dem", "NumPy array of heights", read_npy),
+    ".npz": Format("dem", "NumPy archive with heights (and transform/crs)", read_npz),
+    ".tif": Format("dem", "GeoTIFF", read_geotiff, windowed=True),
+    ".tiff": Format("dem", "GeoTIFF", read_geotiff, windowed=True),
+    ".bpt": Format("patches", "Bezier patch set"),
+}
+
+
+def suffixes(kind: str) -> tuple[str, ...]:
+    """The listed suffixes of one kind, sorted (e.g. every DEM suffix)."""
+    return tuple(sorted(s for s, f in FORMATS.items() if f.kind == kind))
+
+
+def kind_of(path: str | os.PathLike) -> str:
+    """What ``path`` holds by its name: a folder is ``"dicom"``, a listed suffix its kind,
+    anything else ``"mesh"`` (for PyVista/VTK's readers, which know many formats)."""
+    p = Path(path)
+    if p.is_dir():
+        return "dicom"
+    fmt = FORMATS.get(p.suffix.lower())
+    return fmt.kind if fmt is not None else "mesh"
