@@ -1,11 +1,11 @@
 """``capture``: one VTK offscreen render of a scene -> float32 G-buffers.
 
 How (a visibility buffer, Burns & Hunt 2013): VTK rasterises the scene once, every triangle
-flat-coloured with its own index (:mod:`sciviz_gbuf.core._render`). For each covered pixel the ray
-through the pixel centre is then intersected in float64 with that triangle
+flat-coloured with its own index (:mod:`sciviz_gbuf.core._render`). For each covered pixel the
+ray through the pixel centre is then intersected in float64 with that triangle
 (:mod:`sciviz_gbuf.core._capture_kernels`), which yields world coordinates, linear depth,
-Saito's ``sz`` (1990 Eq. 6), interpolated normals, texture coordinates and scalars, all exact to float32,
-from a single render however many channels are asked for.
+Saito's ``sz`` (1990 Eq. 6), interpolated normals, texture coordinates and scalars, all exact
+to float32, from a single render however many channels are asked for.
 """
 
 from __future__ import annotations
