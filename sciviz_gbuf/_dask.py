@@ -25,7 +25,7 @@ import numpy as np
 
 from .errors import InputError
 
-__all__ = ["any_dask", "is_dask", "map_stencil", "reduce"]
+__all__ = ["any_dask", "as_dask", "is_dask", "map_stencil", "reduce"]
 
 
 def is_dask(x: object) -> bool:
@@ -38,7 +38,7 @@ def any_dask(*xs: object) -> bool:
     return any(is_dask(x) for x in xs)
 
 
-def _as_dask(name: str, a: Any, like: Any | None) -> Any:
+def as_dask(name: str, a: Any, like: Any | None) -> Any:
     import dask.array as da
 
     if not is_dask(a):
@@ -92,8 +92,8 @@ def map_stencil(
 
     names = [k for k, v in arrays.items() if v is not None]
     lead = next(k for k in names if is_dask(arrays[k]))
-    first = _as_dask(lead, arrays[lead], None)
-    blocks = [_as_dask(k, arrays[k], first) for k in names]
+    first = as_dask(lead, arrays[lead], None)
+    blocks = [as_dask(k, arrays[k], first) for k in names]
     blocks = list(da.core.unify_chunks(*(x for b in blocks for x in (b, "ij")))[1])
     # The same checks the in-memory path makes, on a sample of each input's dtype.
     func(**{k: np.zeros((3, 3), b.dtype) for k, b in zip(names, blocks, strict=True)}, **params)

@@ -7,14 +7,14 @@ All functions are vectorised, return new arrays and never modify their inputs. R
 from __future__ import annotations
 
 import math
-import os
 from collections.abc import Sequence
-from pathlib import Path
 
 import numpy as np
 
 from . import _validate
 from .errors import InputError
+from .writers.geotiff import write_geotiff
+from .writers.png import check_image, to_uint8, write_png
 
 __all__ = [
     "colorize",
@@ -28,8 +28,6 @@ __all__ = [
 
 _Colour = Sequence[float]
 _M24 = np.uint64(0xFFFFFF)
-# Images of at least this many pixels are encoded fast (multithreaded, low zlib level).
-_LARGE_PNG = 4_000_000
 
 
 # ---------------------------------------------------------------------------- checks
@@ -186,178 +184,9 @@ def ids_to_rgb(ids: np.ndarray, *, background: _Colour = (1.0, 1.0, 1.0)) -> np.
     return rgb
 
 
-# ---------------------------------------------------------------------------- images
-def _image(image: object, name: str = "image") -> np.ndarray:
-    a = np.asarray(image)
-    ok_shape = a.ndim == 2 or (a.ndim == 3 and a.shape[2] in (3, 4))
-    if not ok_shape or a.size == 0:
-        raise InputError(f"{name}: expected shape (H, W), (H, W, 3) or (H, W, 4), got {a.shape}")
-    if a.dtype not in (np.uint8, np.bool_) and not np.issubdtype(a.dtype, np.floating):
-        raise InputError(f"{name}: expected float in [0, 1], uint8 or bool, got dtype {a.dtype}")
-    return a
-
-
-def to_uint8(rgb: np.ndarray) -> np.ndarray:
-    """Convert an image to 8 bits: float ``[0, 1]`` -> ``round(255 x)``; bool -> 0/255.
-
-    Parameters
-    ----------
-    rgb : (H, W), (H, W, 3) or (H, W, 4) array_like
-        Float in ``[0, 1]`` (values outside are clipped), uint8 (copied) or bool.
-
-    Returns
-    -------
-    uint8 ndarray of the same shape
-    """
-    a = _image(rgb, "rgb")
-    if a.dtype == np.uint8:
-        return a.copy()
-    if a.dtype == np.bool_:
-        return np.where(a, np.uint8(255), np.uint8(0))
-    if not np.isfinite(a).all():
-        raise InputError("rgb: expected finite values in [0, 1], got NaN or infinity")
-    return np.rint(np.clip(a, 0.0, 1.0) * 255.0).astype(np.uint8)
-
-
-def write_png(path: str | os.PathLike, image: np.ndarray) -> Path:
-    """Write an image as PNG with Pillow.
-
-    Parameters
-    ----------
-    path : str or path-like
-        Output file; its directory must exist.
-    image : (H, W), (H, W, 3) or (H, W, 4) array_like
-        Float in ``[0, 1]``, uint8 or bool (grey, RGB or RGBA).
-
-    Returns
-    -------
-    pathlib.Path
-        The path written.
-    """
-    from PIL import Image
-
-    p = Path(path)
-    if p.suffix.lower() != ".png":
-        raise InputError(f"path: expected a file name ending in .png, got {str(p)!r}")
-    if not p.parent.is_dir():
-        raise InputError(f"path: no such directory {str(p.parent)!r}")
-    pixels = to_uint8(image)
-    if pixels.shape[0] * pixels.shape[1] >= _LARGE_PNG:
-        from .writers.png import write_png_fast
-
-        return write_png_fast(p, pixels)
-    Image.fromarray(pixels).save(p, format="PNG")
-    return p
-
-
-def _transform(dem: object, transform: object, crs: object, who: str) -> np.ndarray:
-    """The checked GDAL geotransform of ``dem=`` or ``transform=`` (exactly one of them)."""
-    if dem is not None:
-        if transform is not None or crs is not None:
-            raise InputError(f"{who}: give dem= or transform=/crs=, not both")
-        transform = dem.transform
-    if transform is None:
-        raise InputError(f"{who}: a georeference is needed: pass dem= or transform=")
-    gt = np.asarray(transform, dtype=np.float64).reshape(-1)
-    if gt.size != 6 or not np.isfinite(gt).all() or gt[1] == 0 or gt[5] == 0:
-        raise InputError(
-            f"transform: expected a GDAL 6-tuple with non-zero pixel size, got {transform!r}"
-        )
-    return gt
-
-
-def rasterio_crs(crs: object):
-    """``crs`` (EPSG code, WKT, ...) as a rasterio CRS, None as None; InputError if unreadable."""
-    from rasterio.crs import CRS
-
-    try:
-        return None if crs is None else CRS.from_user_input(crs)
-    except Exception as exc:  # rasterio raises its own CRSError family
-        raise InputError(f"crs: rasterio cannot read {str(crs)[:80]!r}: {exc}") from exc
-
-
-def write_geotiff(
-    path: str | os.PathLike,
-    image: np.ndarray,
-    *,
-    dem: object = None,
-    transform: Sequence[float] | None = None,
-    crs: str | None = None,
-) -> Path:
-    """Write an image as a georeferenced, tiled, deflate-compressed GeoTIFF (needs rasterio).
-
-    Parameters
-    ----------
-    path : str or path-like
-        Output file (``.tif``/``.tiff``); its directory must exist.
-    image : (H, W), (H, W, 3) or (H, W, 4) array_like
-        Float in ``[0, 1]``, uint8 or bool; written as 8-bit grey, RGB or RGBA (the fourth band
-        tagged as alpha, so GIS software shows nodata as transparent).
-    dem : sciviz_gbuf.readers.DEM, optional
-        Take ``transform`` and ``crs`` from this DEM (the grid the image was made on).
-    transform : 6 floats, optional
-        GDAL geotransform of the pixel corners.
-    crs : str, optional
-        Anything rasterio's ``CRS.from_user_input`` accepts (``"EPSG:4326"``, WKT).
-
-    Returns
-    -------
-    pathlib.Path
-    """
-    p = Path(path)
-    if p.suffix.lower() not in (".tif", ".tiff"):
-        raise InputError(f"path: expected a file name ending in .tif or .tiff, got {str(p)!r}")
-    if not p.parent.is_dir():
-        raise InputError(f"path: no such directory {str(p.parent)!r}")
-    gt = _transform(dem, transform, crs, "write_geotiff")
-    pixels = to_uint8(image)
-    if pixels.ndim == 2:
-        pixels = pixels[..., None]
-    try:
-        import rasterio
-        from rasterio.enums import ColorInterp
-        from rasterio.transform import Affine
-    except ImportError as exc:
-        raise InputError(
-            f"{p}: writing GeoTIFF needs rasterio: pip install 'sciviz-gbuf[geo]'"
-        ) from exc
-    crs_obj = rasterio_crs(dem.crs if dem is not None else crs)
-    h, w, c = pixels.shape
-    profile = {
-        "driver": "GTiff",
-        "width": w,
-        "height": h,
-        "count": c,
-        "dtype": "uint8",
-        "crs": crs_obj,
-        "transform": Affine.from_gdal(*gt),
-        "compress": "deflate",
-        "zlevel": 1 if h * w >= _LARGE_PNG else 6,
-        "predictor": 2,
-        "num_threads": "ALL_CPUS",
-        "interleave": "pixel",
-    }
-    if h >= 256 and w >= 256:
-        profile.update(tiled=True, blockxsize=256, blockysize=256)
-    if c >= 3:
-        profile["photometric"] = "RGB"
-    if c in (2, 4):
-        profile["alpha"] = "unassociated"
-    interp = {
-        1: [ColorInterp.gray],
-        2: [ColorInterp.gray, ColorInterp.alpha],
-        3: [ColorInterp.red, ColorInterp.green, ColorInterp.blue],
-        4: [ColorInterp.red, ColorInterp.green, ColorInterp.blue, ColorInterp.alpha],
-    }[c]
-    with rasterio.open(p, "w", **profile) as dst:
-        dst.colorinterp = interp  # before the pixels: GDAL fixes the TIFF's ExtraSamples then
-        dst.write(np.moveaxis(pixels, 2, 0))
-    return p
-
-
 def _as_rgb(image: object, name: str) -> np.ndarray:
     """Any accepted image as (H, W, 3) uint8 (alpha dropped, grey repeated)."""
-    a = to_uint8(_image(image, name))
+    a = to_uint8(check_image(image, name))
     if a.ndim == 2:
         return np.repeat(a[..., None], 3, axis=2)
     return a[..., :3]

@@ -111,13 +111,13 @@ from . import filters as F
 from .core.camera import VIEWS, CameraInfo
 from .core.capture import (
     DEFAULT_WINDOW_SIZE,
-    _check_scalars,
-    _check_window_size,
-    _resolve_camera,
     capture,
+    check_scalars,
+    check_window_size,
+    resolve_camera,
 )
-from .core.gbuffer import _META, GBuffer
-from .core.scene import _is_plotter, scene_items
+from .core.gbuffer import META_KEY, GBuffer
+from .core.scene import is_plotter, scene_items
 from .errors import InputError
 
 __all__ = [
@@ -252,7 +252,7 @@ def _meta_supersample(data: object) -> int | None:
     """``supersample`` recorded in a G-buffer image's field data, or None."""
     if not isinstance(data, vtkImageData):
         return None
-    arr = data.GetFieldData().GetAbstractArray(_META)
+    arr = data.GetFieldData().GetAbstractArray(META_KEY)
     if arr is None or arr.GetNumberOfValues() == 0:
         return None
     try:
@@ -429,7 +429,7 @@ class vtkGBufferCapture(_GBufferAlgorithm):
         if width is None:
             size = None
         else:
-            size = _check_window_size(width if height is None else (width, height))
+            size = check_window_size(width if height is None else (width, height))
         if size != self._window_size:
             self._window_size = size
             self.Modified()
@@ -438,7 +438,7 @@ class vtkGBufferCapture(_GBufferAlgorithm):
         """The window size that will be captured (resolved from the scene if not set)."""
         if self._window_size is not None:
             return self._window_size
-        if _is_plotter(self._scene):
+        if is_plotter(self._scene):
             return tuple(int(v) for v in self._scene.window_size)  # type: ignore[union-attr]
         if isinstance(self._scene, vtkRenderer) and self._scene.GetRenderWindow() is not None:
             w, h = self._scene.GetRenderWindow().GetSize()
@@ -467,7 +467,7 @@ class vtkGBufferCapture(_GBufferAlgorithm):
                     f"camera: unknown view {camera!r}; expected one of {sorted(VIEWS)}"
                 )
         elif camera is not None:
-            _resolve_camera(camera, None, None)  # validates (raises InputError)
+            resolve_camera(camera, None, None)  # validates (raises InputError)
         key = _camera_key(camera)
         if (camera is None) == (self._camera is None) and _same(key, self._camera_key):
             return
@@ -503,7 +503,7 @@ class vtkGBufferCapture(_GBufferAlgorithm):
             self.Modified()
 
     def SetScalars(self, scalars: str | Sequence[str]) -> None:
-        names = _check_scalars(scalars)
+        names = check_scalars(scalars)
         if names != self._scalars:
             self._scalars = names
             self.Modified()

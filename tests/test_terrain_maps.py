@@ -306,7 +306,7 @@ def test_cli_birdseye_and_sumi_e(tmp_path, shared_data):
 def test_large_png_encoder_round_trip(tmp_path):
     import zlib
 
-    from sciviz_gbuf.writers.png import _adler32_combine, encode_png, write_png_fast
+    from sciviz_gbuf.writers._png_encoder import _adler32_combine, encode_png, write_png_fast
 
     a, b = b"sciviz" * 9999, bytes(range(256)) * 77
     assert _adler32_combine(zlib.adler32(a), zlib.adler32(b), len(b)) == zlib.adler32(a + b)

@@ -27,7 +27,7 @@ import pyvista as pv
 
 from .. import styles
 from ..compose import colorize, ids_to_rgb, montage, normals_to_rgb, write_png
-from ..core.capture import _check_window_size, capture
+from ..core.capture import capture, check_window_size
 from ..core.gbuffer import GBuffer
 from ..datasets import load_frog_skeleton, load_jacksboro_dem, load_jacksboro_terrain, load_nut
 from ..filters import lambert
@@ -620,7 +620,7 @@ def run_demo(
         montage each
         (``fig<n>_<key>.png``, ``fig<n>_montage.png``); finally ``index.html``.
     """
-    width, height = _check_window_size(window_size)
+    width, height = check_window_size(window_size)
     out = Path(outdir)
     out.mkdir(parents=True, exist_ok=True)
     scenes = _scenes(width / height)

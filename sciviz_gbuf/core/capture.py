@@ -21,9 +21,16 @@ from . import _capture_kernels as _kernels
 from ._render import IdRenderer
 from .camera import VIEWS, CameraInfo
 from .gbuffer import GBuffer
-from .scene import Surface, _is_plotter, collect_surfaces
+from .scene import Surface, collect_surfaces, is_plotter
 
-__all__ = ["DEFAULT_WINDOW_SIZE", "MAX_BUFFER_SIZE", "capture"]
+__all__ = [
+    "DEFAULT_WINDOW_SIZE",
+    "MAX_BUFFER_SIZE",
+    "capture",
+    "check_scalars",
+    "check_window_size",
+    "resolve_camera",
+]
 
 DEFAULT_WINDOW_SIZE = (1024, 768)
 #: Largest buffer edge in pixels (window size times supersample); OpenGL's usual limit.
@@ -32,7 +39,7 @@ MAX_BUFFER_SIZE = 16384
 _CLIP_MARGIN = 1e-3
 
 
-def _check_window_size(window_size: object) -> tuple[int, int]:
+def check_window_size(window_size: object) -> tuple[int, int]:
     try:
         w, h = window_size  # type: ignore[misc]
         ok = all(float(v) == int(v) for v in (w, h))
@@ -45,7 +52,7 @@ def _check_window_size(window_size: object) -> tuple[int, int]:
     return int(w), int(h)
 
 
-def _check_scalars(scalars: object) -> tuple[str, ...]:
+def check_scalars(scalars: object) -> tuple[str, ...]:
     if isinstance(scalars, str):
         return (scalars,)
     try:
@@ -58,11 +65,11 @@ def _check_scalars(scalars: object) -> tuple[str, ...]:
     return names
 
 
-def _resolve_camera(camera: object, scene: object, parallel: bool | None) -> tuple[vtkCamera, bool]:
+def resolve_camera(camera: object, scene: object, parallel: bool | None) -> tuple[vtkCamera, bool]:
     """A new camera for the capture, and whether it still has to be fitted to the data."""
     cam = vtkCamera()
     reset = False
-    if camera is None and _is_plotter(scene):
+    if camera is None and is_plotter(scene):
         cam.DeepCopy(scene.renderer.GetActiveCamera())
         # A Plotter that was never shown has not placed its camera yet: place it as it will.
         camera = cam if scene.renderer.camera_set else "iso"
@@ -236,8 +243,8 @@ def capture(
         Empty scene, bad window size, NaN coordinates, unknown scalar name, bad camera.
     """
     if window_size is None:
-        window_size = tuple(scene.window_size) if _is_plotter(scene) else DEFAULT_WINDOW_SIZE
-    width, height = _check_window_size(window_size)
+        window_size = tuple(scene.window_size) if is_plotter(scene) else DEFAULT_WINDOW_SIZE
+    width, height = check_window_size(window_size)
     if (
         isinstance(supersample, bool)
         or not isinstance(supersample, (int, np.integer))
@@ -252,7 +259,7 @@ def capture(
         )
     if not (0.0 <= float(feature_angle) <= 180.0):
         raise InputError(f"feature_angle: expected degrees in [0, 180], got {feature_angle!r}")
-    names = _check_scalars(scalars)
+    names = check_scalars(scalars)
 
     with progress(progress_bar, 4, "capture") as bar:
         surfaces = collect_surfaces(scene, feature_angle=float(feature_angle))
@@ -273,7 +280,7 @@ def capture(
         points, normals, triangles, tri_obj, tri_cell, n_pts = _merge(surfaces)
         bar.step("render")
 
-        cam, reset = _resolve_camera(camera, scene, parallel_projection)
+        cam, reset = resolve_camera(camera, scene, parallel_projection)
         renderer = IdRenderer(points, triangles)
         try:
             renderer.window.SetSize(*size)

@@ -17,11 +17,11 @@ from ..errors import InputError
 from ._block_mean_kernels import block_mean
 from .camera import CameraInfo
 
-__all__ = ["FORMAT_VERSION", "GBuffer", "check_gbuffer"]
+__all__ = ["FORMAT_VERSION", "META_KEY", "GBuffer", "check_gbuffer"]
 
 FORMAT_VERSION = 1
 _SCALAR_PREFIX = "scalars:"
-_META = "sciviz_gbuf_meta"
+META_KEY = "sciviz_gbuf_meta"
 # (name, dtype, trailing shape) of the fixed channels
 _CHANNELS: tuple[tuple[str, type, tuple[int, ...]], ...] = (
     ("depth", np.float32, ()),
@@ -201,7 +201,7 @@ class GBuffer:
         suffix = p.suffix.lower()
         if suffix == ".npz":
             arrays = self.channels()
-            np.savez_compressed(p, **arrays, **{_META: np.array(self._meta())})
+            np.savez_compressed(p, **arrays, **{META_KEY: np.array(self._meta())})
         elif suffix == ".vti":
             self.to_pyvista().save(p)
         else:
@@ -221,9 +221,9 @@ class GBuffer:
                     arrays = {k: z[k] for k in z.files}
             except (OSError, ValueError) as exc:
                 raise InputError(f"{p}: cannot read as .npz ({exc})") from exc
-            if _META not in arrays:
-                raise InputError(f"{p}: not a sciviz_gbuf G-buffer (no {_META!r} record)")
-            return cls._from_arrays(arrays, str(arrays.pop(_META)), str(p))
+            if META_KEY not in arrays:
+                raise InputError(f"{p}: not a sciviz_gbuf G-buffer (no {META_KEY!r} record)")
+            return cls._from_arrays(arrays, str(arrays.pop(META_KEY)), str(p))
         if suffix == ".vti":
             import pyvista as pv
 
@@ -250,20 +250,20 @@ class GBuffer:
                 a = a.astype(np.uint8)
             flat = a[::-1].reshape(h * w, *a.shape[2:])
             img.point_data[name] = np.ascontiguousarray(flat)
-        img.field_data[_META] = np.array([self._meta()])
+        img.field_data[META_KEY] = np.array([self._meta()])
         return img
 
     @classmethod
     def from_pyvista(cls, image, *, source: str = "image") -> GBuffer:
         """Inverse of :meth:`to_pyvista`."""
-        if _META not in image.field_data:
-            raise InputError(f"{source}: not a sciviz_gbuf G-buffer (no {_META!r} field data)")
+        if META_KEY not in image.field_data:
+            raise InputError(f"{source}: not a sciviz_gbuf G-buffer (no {META_KEY!r} field data)")
         w, h, _ = image.dimensions
         arrays = {}
         for name in image.point_data.keys():
             a = np.asarray(image.point_data[name])
             arrays[name] = a.reshape(h, w, *a.shape[1:])[::-1]
-        meta = image.field_data[_META]
+        meta = image.field_data[META_KEY]
         return cls._from_arrays(arrays, str(meta[0]), source)
 
 

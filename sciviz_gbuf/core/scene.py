@@ -21,7 +21,7 @@ from vtkmodules.vtkFiltersGeometry import vtkDataSetSurfaceFilter, vtkGeometryFi
 
 from ..errors import InputError
 
-__all__ = ["Surface", "collect_surfaces", "scene_items"]
+__all__ = ["Surface", "collect_surfaces", "is_plotter", "make_surface", "scene_items"]
 
 _CELL_ID = "__sciviz_gbuf_cell_id"
 
@@ -70,7 +70,7 @@ class Surface:
         return np.asarray(pv.convert_array(tc))[:, :2]
 
 
-def _is_plotter(scene: object) -> bool:
+def is_plotter(scene: object) -> bool:
     return isinstance(scene, pv.BasePlotter)
 
 
@@ -82,7 +82,7 @@ def scene_items(scene: object) -> list[tuple[str, object, np.ndarray | None]]:
     InputError
         If the scene is empty or holds something that is not a dataset.
     """
-    if _is_plotter(scene):
+    if is_plotter(scene):
         items = []
         for key, actor in scene.renderer.actors.items():
             if not actor.GetVisibility() or not hasattr(actor, "GetMapper"):

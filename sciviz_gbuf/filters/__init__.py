@@ -2,11 +2,11 @@
 returning new float32 arrays; inputs are never modified. Shades are in [0, 1] with 1 = lit;
 line images are ink in [0, 1] with 1 = full ink (signed images are documented as such)."""
 
-from .bands import BATHYMETRIC, HYPSOMETRIC, color_bands
+from .bands import BATHYMETRIC, HYPSOMETRIC, color_bands, composite_map
 from .contour_vectors import ContourPolyline, contour_polylines, polylines_to_geojson
 from .contours import contour_lines, hatching
 from .edges import crease_edges, edge_map, enhance, id_edges, internal_edges, profile_edges
-from .hillshade import hillshade
+from .hillshade import fill_nodata_ring, hillshade
 from .operators import (
     c1_discontinuity,
     diagonal_depth_discontinuity,
@@ -27,6 +27,7 @@ __all__ = [
     "c1_discontinuity",
     "cast_shadows",
     "color_bands",
+    "composite_map",
     "contour_lines",
     "contour_polylines",
     "crease_edges",
@@ -34,6 +35,7 @@ __all__ = [
     "diagonal_normal_discontinuity",
     "edge_map",
     "enhance",
+    "fill_nodata_ring",
     "hatching",
     "highlight_lines",
     "hillshade",

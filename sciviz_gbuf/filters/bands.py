@@ -13,7 +13,7 @@ from .. import _validate
 from ..errors import InputError
 from . import _band_kernels as _bk
 
-__all__ = ["BATHYMETRIC", "HYPSOMETRIC", "color_bands"]
+__all__ = ["BATHYMETRIC", "HYPSOMETRIC", "band_tables", "color_bands", "composite_map"]
 
 # Land tints from lowland green through yellow and brown to rock grey and snow.
 _LAND = (
@@ -195,12 +195,10 @@ def _chunked_bands(heights, mask, vmin, vmax, **params):
     ``vmin``/``vmax`` come first from one reduction pass over the valid heights."""
     import dask.array as da
 
-    from .._dask import _as_dask
-
-    z = _as_dask("heights", heights, None)
+    z = _chunks.as_dask("heights", heights, None)
     valid = da.isfinite(z)
     if mask is not None:
-        valid &= _as_dask("mask", mask, z).astype(bool)
+        valid &= _chunks.as_dask("mask", mask, z).astype(bool)
     if vmin is None or vmax is None:
         kept = da.where(valid, z, np.nan).astype(np.float32)
         lo, hi, n = _chunks.reduce(da.nanmin(kept), da.nanmax(kept), valid.sum())
@@ -222,3 +220,75 @@ def _chunked_bands(heights, mask, vmin, vmax, **params):
         dtype=np.float32,
         meta=np.empty((0, 0, 0), np.float32),
     )
+
+
+def composite_map(
+    heights: np.ndarray,
+    *,
+    tables: tuple | None,
+    relief: np.ndarray | None = None,
+    flat: float = 1.0,
+    shadow: np.ndarray | None = None,
+    sky: np.ndarray | None = None,
+    ink: np.ndarray | None = None,
+    ink_color: Sequence[float] = (0.0, 0.0, 0.0),
+) -> np.ndarray:
+    """A topographic map's pixels in one fused pass (1990 §4.3, Fig. 11): band colours, lit by
+    the relief, overdrawn with contour ink, as uint8 RGBA (no float image of the map is made).
+
+    Parameters
+    ----------
+    heights : (H, W) array
+        The heights; NaN cells come out transparent black.
+    tables : tuple or None
+        The band colours, :func:`band_tables` of the map's options; None: white paper.
+    relief : (H, W) array, optional
+        Hillshade in [0, 1]. The light is ``1/3 sky + 2/3 relief * shadow / flat``, 1 on open
+        flat ground; below 1 it multiplies the colour, above 1 it lifts it up to halfway to
+        white. None: no relief (``flat``, ``shadow`` and ``sky`` unused).
+    flat : float
+        The hillshade of open flat ground (the relief's normalisation).
+    shadow, sky : (H, W) arrays, optional
+        Cast-shadow light (0 in shadow) and sky-view factor; None: fully lit, open sky.
+    ink, ink_color : (H, W) array and RGB, optional
+        Contour ink in [0, 1] and its colour.
+
+    Returns
+    -------
+    (H, W, 4) uint8 RGBA
+    """
+    z = np.ascontiguousarray(heights, dtype=np.float32)
+    colours = tables
+    if colours is None:  # no bands: white paper (the kernel ignores the tables)
+        colours = band_tables(
+            np.zeros(1, np.float32),
+            interval=None,
+            levels=None,
+            base=0.0,
+            cmap=None,
+            vmin=0.0,
+            vmax=1.0,
+            sea_level=None,
+            sea_cmap=None,
+        )
+    empty = np.zeros((0, 0), np.float32)
+
+    def layer(a: np.ndarray | None) -> np.ndarray:
+        # contiguous float32 always: one compiled signature of the kernel, not one per layout
+        return empty if a is None else np.ascontiguousarray(a, dtype=np.float32)
+
+    out = np.empty((*z.shape, 4), dtype=np.uint8)
+    _bk.map_image(
+        z,
+        tables is not None,
+        *colours,
+        relief is not None,
+        layer(relief),
+        np.float32(flat),
+        layer(shadow),
+        layer(sky),
+        layer(ink),
+        _validate.rgb(ink_color, "ink_color"),
+        out,
+    )
+    return out

@@ -13,126 +13,16 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
 from scipy import ndimage
 
 from .. import _dask as _chunks
 from ..errors import InputError
+from . import _terrain_light_kernels as _k
 from .hillshade import check_grid, float32_heights
 
 __all__ = ["cast_shadows", "sky_view"]
 
 _SNAP = 1e-12  # sin/cos of multiples of 90 degrees are off by ~1e-16: snap them to 0 or +-1
-
-
-@njit(cache=True, inline="always")
-def _sample(start: int, offset: float, n: int) -> tuple[int, float]:
-    """Cell and interpolation weight of a ray sample ``offset`` cells from cell ``start`` along
-    an axis of ``n`` cells. The weight comes from the offset alone, not from ``start + offset``,
-    so it is the same wherever the ray starts: a chunk of the grid (out-of-core evaluation)
-    samples exactly as the whole grid. The clamps absorb rounding of samples that land on the
-    first or last cell."""
-    b = math.floor(offset)
-    f = offset - b
-    c = start + int(b)
-    if c < 0:
-        return 0, 0.0
-    if c >= n - 1:
-        return n - 1, 0.0
-    return c, f
-
-
-@njit(cache=True, inline="always")
-def _horizon_tan(
-    z: np.ndarray,
-    i: int,
-    j: int,
-    d_row: float,
-    d_col: float,
-    step_len: float,
-    row_ub: np.ndarray,
-    rw: int,
-    col_ub: np.ndarray,
-    cw: int,
-    cell_ub: float,
-    floor_tan: float,
-    stop_tan: float,
-    max_steps: int,
-) -> float:
-    """Largest ``(height - z[i, j]) / distance`` over the samples of a ray, at least ``floor_tan``.
-
-    The ray starts at cell (i, j) and moves ``(d_row, d_col)`` cells per step (one of them is
-    +-1), ``step_len`` metres per step. It stops at the grid edge, after ``max_steps`` steps, as
-    soon as the result reaches ``stop_tan`` or when no cell ahead could raise it: ``row_ub[rw, r]``
-    and ``col_ub[cw, c]`` bound the heights of all rows / columns from r / c onwards in the ray's
-    direction (see :func:`_bounds`), ``cell_ub`` bounds all the ray's samples. (Rows of 2-D
-    arrays rather than 1-D slices: a slice per ray costs atomic reference counting, which
-    threads contend for.) Samples that touch a NaN cell are
-    skipped: nodata never blocks.
-    """
-    h, w = z.shape
-    z0 = np.float64(z[i, j])
-    best = floor_tan
-    # the number of steps inside the grid, up front: no bounds checks in the loop. The 1e-9 and
-    # the clamps below absorb rounding of positions that land exactly on the last row/column.
-    if abs(d_row) == 1.0:
-        di = int(d_row)
-        n_in = h - 1 - i if di > 0 else i
-        if d_col > 0.0:
-            n_in = min(n_in, int((w - 1 - j) / d_col + 1e-9))
-        elif d_col < 0.0:
-            n_in = min(n_in, int(j / -d_col + 1e-9))
-        for k in range(1, min(n_in, max_steps) + 1):
-            dist = k * step_len
-            r = i + k * di
-            c0, f = _sample(j, k * d_col, w)
-            # all later samples are at most this high: once the ray clears it, nothing can block
-            if min(row_ub[rw, r], col_ub[cw, c0], cell_ub) - z0 <= best * dist:
-                break
-            a = z[r, c0]
-            v = a + f * (z[r, c0 + 1] - a) if f > 0.0 else a
-            rise = v - z0  # NaN (nodata) compares False: not blocking
-            if rise > best * dist:
-                best = rise / dist
-                if best >= stop_tan:
-                    break
-    else:
-        dj = int(d_col)
-        n_in = w - 1 - j if dj > 0 else j
-        if d_row > 0.0:
-            n_in = min(n_in, int((h - 1 - i) / d_row + 1e-9))
-        elif d_row < 0.0:
-            n_in = min(n_in, int(i / -d_row + 1e-9))
-        for k in range(1, min(n_in, max_steps) + 1):
-            dist = k * step_len
-            c = j + k * dj
-            r0, f = _sample(i, k * d_row, h)
-            if min(row_ub[rw, r0], col_ub[cw, c], cell_ub) - z0 <= best * dist:
-                break
-            a = z[r0, c]
-            v = a + f * (z[r0 + 1, c] - a) if f > 0.0 else a
-            rise = v - z0
-            if rise > best * dist:
-                best = rise / dist
-                if best >= stop_tan:
-                    break
-    return best
-
-
-@njit(cache=True)
-def _line_max(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Largest height of every row and every column (-inf where all nodata)."""
-    h, w = z.shape
-    rows = np.full(h, -np.inf)
-    cols = np.full(w, -np.inf)
-    for i in range(h):
-        for j in range(w):
-            v = z[i, j]
-            if v > rows[i]:  # NaN compares False
-                rows[i] = v
-            if v > cols[j]:
-                cols[j] = v
-    return rows, cols
 
 
 def _bounds(line: np.ndarray) -> np.ndarray:
@@ -174,101 +64,6 @@ def sky_view_reach(radius: float, dx: float, dy: float) -> int:
 
 def _which(step: float) -> int:
     return 0 if step > 0.0 else (1 if step < 0.0 else 2)
-
-
-@njit(parallel=True, cache=True)
-def _shadow_kernel(
-    z: np.ndarray,
-    d_row: float,
-    d_col: float,
-    step_len: float,
-    row_ub: np.ndarray,
-    rw: int,
-    col_ub: np.ndarray,
-    cw: int,
-    altitude: float,
-    sun_radius: float,
-) -> np.ndarray:
-    h, w = z.shape
-    out = np.full((h, w), np.nan, dtype=np.float32)
-    floor_tan = math.tan(math.radians(altitude - sun_radius))
-    stop_tan = math.tan(math.radians(altitude + sun_radius)) if sun_radius > 0.0 else floor_tan
-    alt = math.radians(altitude)
-    rad = math.radians(sun_radius)
-    max_steps = h + w
-    for i in prange(h):
-        for j in range(w):
-            if np.isnan(z[i, j]):
-                continue
-            t = _horizon_tan(
-                z,
-                i,
-                j,
-                d_row,
-                d_col,
-                step_len,
-                row_ub,
-                rw,
-                col_ub,
-                cw,
-                np.inf,
-                floor_tan,
-                stop_tan,
-                max_steps,
-            )
-            if sun_radius == 0.0:
-                out[i, j] = 1.0 if t <= floor_tan else 0.0
-            else:
-                # share of the sun disc above a straight horizon at elevation atan(t)
-                s = min(max((math.atan(t) - alt) / rad, -1.0), 1.0)
-                out[i, j] = (math.acos(s) - s * math.sqrt(1.0 - s * s)) / math.pi
-    return out
-
-
-@njit(parallel=True, cache=True)
-def _sky_view_kernel(
-    z: np.ndarray,
-    d_rows: np.ndarray,
-    d_cols: np.ndarray,
-    step_lens: np.ndarray,
-    row_ubs: np.ndarray,
-    col_ubs: np.ndarray,
-    row_which: np.ndarray,
-    col_which: np.ndarray,
-    local_ub: np.ndarray,
-    radius: float,
-) -> np.ndarray:
-    h, w = z.shape
-    out = np.full((h, w), np.nan, dtype=np.float32)
-    n = d_rows.shape[0]
-    max_steps = np.empty(n, dtype=np.int64)
-    for d in range(n):
-        max_steps[d] = min(math.floor(radius / step_lens[d] * (1.0 + 1e-12)), h + w)
-    for i in prange(h):
-        for j in range(w):
-            if np.isnan(z[i, j]):
-                continue
-            acc = 0.0
-            for d in range(n):
-                t = _horizon_tan(
-                    z,
-                    i,
-                    j,
-                    d_rows[d],
-                    d_cols[d],
-                    step_lens[d],
-                    row_ubs,
-                    row_which[d],
-                    col_ubs,
-                    col_which[d],
-                    local_ub[i, j],
-                    0.0,
-                    np.inf,
-                    max_steps[d],
-                )
-                acc += t / math.sqrt(1.0 + t * t)  # sin(atan(t)), t >= 0
-            out[i, j] = 1.0 - acc / n
-    return out
 
 
 def _snap(v: float) -> float:
@@ -380,8 +175,8 @@ def cast_shadows(
     if float(altitude) == 90.0 or z.size == 0:
         return np.where(np.isnan(z), np.float32(np.nan), np.float32(1.0))
     d_row, d_col, step_len = _ray_steps(float(azimuth), float(dx), float(dy))
-    rows, cols = _line_max(z)
-    return _shadow_kernel(
+    rows, cols = _k.line_max(z)
+    return _k.shadow_kernel(
         z,
         d_row,
         d_col,
@@ -476,10 +271,10 @@ def sky_view(
         _ray_steps(360.0 * k / int(directions), float(dx), float(dy)) for k in range(directions)
     ]
     d_rows, d_cols, step_lens = (np.array(s, dtype=np.float64) for s in zip(*steps, strict=True))
-    rows, cols = _line_max(z)
+    rows, cols = _k.line_max(z)
     row_which = np.array([_which(v) for v in d_rows], dtype=np.int64)
     col_which = np.array([_which(v) for v in d_cols], dtype=np.int64)
-    return _sky_view_kernel(
+    return _k.sky_view_kernel(
         z,
         d_rows,
         d_cols,

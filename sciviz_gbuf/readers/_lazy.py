@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from .. import _dask
 from ..errors import InputError
 from ._dem_files import GeoTransform, RawDEM, blank_nodata, crs_is_geographic, raster_georeference
 from ._dem_model import (
@@ -286,7 +287,7 @@ def read_dem_lazy(
         )
         geo = georeference(raw, shape, name, spacing=spacing, geographic=geographic)
         return DEM(heights, da.isfinite(heights), raw.crs, *geo, name)
-    if is_dataarray(source) and _is_dask(getattr(source, "data", None)):
+    if is_dataarray(source) and _dask.is_dask(getattr(source, "data", None)):
         name = f"DataArray {getattr(source, 'name', None)!r}"
         if transform is not None or crs is not None:
             raise InputError(f"{name}: transform=/crs= are for sources without a georeference")
@@ -327,7 +328,7 @@ def reads_lazily(source: Any) -> bool:
         return True
     if isinstance(source, (str, os.PathLike)):
         return _windowed(Path(source))
-    return is_dataarray(source) and _is_dask(getattr(source, "data", None))
+    return is_dataarray(source) and _dask.is_dask(getattr(source, "data", None))
 
 
 def _dataarray_block(
@@ -345,7 +346,3 @@ def chunk_dem(dem, chunks: tuple[int, int] | str):
 
     heights = da.from_array(dem.heights, chunks=chunks)
     return DEM(heights, da.isfinite(heights), *dem_meta(dem))
-
-
-def _is_dask(x: object) -> bool:
-    return type(x).__module__.startswith("dask.array") and hasattr(x, "chunks")

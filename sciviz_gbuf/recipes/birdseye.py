@@ -24,14 +24,8 @@ from ..core.gbuffer import GBuffer
 from ..errors import InputError
 from ..filters import color_bands, contour_lines, lambert, profile_edges
 from ..readers import DEM
-from .terrain import (
-    CONTOUR_COLOR,
-    _check_bands,
-    as_dem,
-    contour_intervals,
-    lit,
-    relief_light,
-)
+from ._intervals import contour_intervals
+from ._map import CONTOUR_COLOR, as_dem, check_bands, lit, relief_light, rgba
 
 __all__ = [
     "PAPER",
@@ -180,7 +174,7 @@ def birdseye_layers(
             dense_spacing=dense_spacing * k,
         )
     sh = lambert(gb.world_normal(), light=_sun(azimuth, altitude), mask=valid)
-    opts = _check_bands(bands, major_interval if major_interval is not None else 5 * interval)
+    opts = check_bands(bands, major_interval if major_interval is not None else 5 * interval)
     if opts is None:
         rgb = np.ones((*elev.shape, 3), dtype=np.float32)
     else:
@@ -206,22 +200,6 @@ def birdseye_layers(
         "wz": gb.downsample(elev),
         "depth": gb.downsample(depth.astype(np.float32)),
     }
-
-
-def _rgba(rgb: np.ndarray, alpha: np.ndarray, background) -> np.ndarray:
-    """uint8 RGBA: ``rgb`` with coverage ``alpha``, transparent where nothing was rendered (or
-    over an opaque ``background`` colour)."""
-    rgb = np.clip(np.asarray(rgb, np.float32), 0.0, 1.0)
-    if rgb.ndim == 2:
-        rgb = np.repeat(rgb[..., None], 3, axis=2)
-    a = np.clip(alpha, 0.0, 1.0)[..., None]
-    if background is not None:
-        bg = _validate.rgb(background, "background")
-        rgb, a = rgb * a + bg * (1.0 - a), np.ones_like(a)
-    out = np.empty((*rgb.shape[:2], 4), dtype=np.uint8)
-    out[..., :3] = np.rint(rgb * 255.0)
-    out[..., 3] = np.rint(a[..., 0] * 255.0)
-    return out
 
 
 def birdseye_panels(
@@ -250,7 +228,7 @@ def birdseye_panels(
         "mx2": grey * (1.0 - pr),
         "mx4": (coloured * (1.0 - cn) + colour * cn) * (1.0 - pr),
     }
-    return {key: _rgba(img, lay["alpha"], background) for key, img in images.items()}
+    return {key: rgba(img, lay["alpha"], background) for key, img in images.items()}
 
 
 def birdseye_map(
@@ -418,7 +396,7 @@ def sumi_e(
         sumi = np.float32([0.08, 0.07, 0.06])
         base = np.asarray(PAPER if paper is None else paper, dtype=np.float32)
         rgb = base * (1.0 - ink[..., None]) + sumi * ink[..., None]
-        out = _rgba(rgb, np.maximum(alpha, ink), None if paper is None else paper)
+        out = rgba(rgb, np.maximum(alpha, ink), None if paper is None else paper)
         bar.step("done")
     return out
 

@@ -29,8 +29,8 @@ from ..core.gbuffer import GBuffer
 from ..core.isosurface import isosurface
 from ..errors import InputError
 from ..filters import color_bands, contour_lines, lambert, profile_edges
-from .birdseye import _rgba
-from .terrain import _round_up
+from ._intervals import round_up
+from ._map import rgba
 
 __all__ = [
     "BONE",
@@ -226,7 +226,7 @@ def _axis(axis: str | None, default: int, name: str) -> int:
 def _interval(values: np.ndarray, count: float) -> float:
     """A round step (1, 2, 2.5, 5 x 10^k) giving about ``count`` steps over the values."""
     lo, hi = float(np.nanmin(values)), float(np.nanmax(values))
-    return _round_up(max(hi - lo, 1e-6) / count) if hi > lo else 1.0
+    return round_up(max(hi - lo, 1e-6) / count) if hi > lo else 1.0
 
 
 def ct_layers(
@@ -385,7 +385,7 @@ def ct_panels(
         "sh": lambda: np.clip(0.15 + 0.85 * sh, 0.0, 1.0) * white,
         "bands": lambda: lit_bands,
     }
-    return {key: _rgba(images[key](), lay["alpha"], background) for key in wanted}
+    return {key: rgba(images[key](), lay["alpha"], background) for key in wanted}
 
 
 def ct_enhance(

@@ -24,8 +24,8 @@ from ..core.gbuffer import GBuffer
 from ..errors import InputError
 from ..filters import contour_lines, lambert, profile_edges
 from ..filters.reflection import isophotes, reflection_lines
-from .birdseye import _rgba
-from .terrain import _round_up
+from ._intervals import round_up
+from ._map import rgba
 
 __all__ = [
     "CURVATURES",
@@ -223,7 +223,7 @@ def surface_layers(
     elif mode == "contours":
         z = np.where(gb.mask, gb.world[..., 2], np.float32(np.nan))
         lo, hi = float(np.nanmin(z)), float(np.nanmax(z))
-        step = interval if interval is not None else _round_up(max(hi - lo, 1e-9) / 20.0)
+        step = interval if interval is not None else round_up(max(hi - lo, 1e-9) / 20.0)
         if not (np.isfinite(step) and step > 0):
             raise InputError(f"interval: expected a height step > 0, got {interval!r}")
         ink = contour_lines(z, interval=step, width=width * k, mask=gb.mask, c_dense=1.0)
@@ -322,4 +322,4 @@ def surface_analysis(
         ink = lay["ink"][..., None]
         img = (lay["rgb"] * shade) * (1.0 - ink) + colour * ink
     img = img * (1.0 - lay["pr"][..., None])
-    return _rgba(img, lay["alpha"], background)
+    return rgba(img, lay["alpha"], background)

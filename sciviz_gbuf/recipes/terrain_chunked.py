@@ -17,32 +17,19 @@ import numpy as np
 
 from .. import _dask as _chunks
 from ..errors import InputError
-from ..filters import hillshade
+from ..filters import fill_nodata_ring, hillshade
 from ..filters import sky_view as sky_view_factor
+from ..filters.hillshade import FILL_RING_RADIUS
 from ..filters.hillshade import RADIUS as HILLSHADE_RADIUS
 from ..readers import DEM
-from . import terrain as _t
+from ._intervals import choose_intervals, median_slope, slope_lattice
+from ._map import composite, flat_shade, map_band_tables, map_contours
 
-__all__ = ["RELIEF_HALO", "lazy_dem", "lazy_topographic_map"]
+__all__ = ["RELIEF_HALO", "lazy_topographic_map"]
 
 #: Stencil radius of a map's relief: GDAL's 3x3 window on the grid whose nodata ring is
 #: extrapolated from up to 2 cells further.
-RELIEF_HALO = HILLSHADE_RADIUS + _t.FILL_RING_RADIUS
-
-
-def lazy_dem(heights) -> DEM:
-    """A :class:`DEM` around a 2-D dask array of heights in metres on 1 m pixels (like an
-    in-memory array given to :func:`~sciviz_gbuf.readers.read_dem`), kept lazy: float32 with
-    NaN at non-finite values."""
-    import dask.array as da
-
-    z = _chunks._as_dask("heights", heights, None)
-    if min(z.shape) == 0:
-        raise InputError(f"heights: expected a non-empty 2-D array, got shape {z.shape}")
-    z = z.astype(np.float32)
-    z = da.where(da.isinf(z), np.float32(np.nan), z)
-    h = z.shape[0]
-    return DEM(z, da.isfinite(z), None, (0.0, 1.0, 0.0, float(h), 0.0, -1.0), (1.0, 1.0), False)
+RELIEF_HALO = HILLSHADE_RADIUS + FILL_RING_RADIUS
 
 
 def _statistics(z, interval, major_interval, vmin, vmax):
@@ -54,19 +41,19 @@ def _statistics(z, interval, major_interval, vmin, vmax):
     lo = hi = float("nan")
     slope = None
     if need_range:
-        lattice = _t.slope_lattice(z) if need_slope else None
+        lattice = slope_lattice(z) if need_slope else None
         lo, hi, *cells = _chunks.reduce(
             da.nanmin(z), da.nanmax(z), *(lattice if lattice is not None else ())
         )
         lo, hi = float(lo), float(hi)
         if need_slope:
-            slope = _t.median_slope(*cells) if cells else float("nan")
-    lo, hi, interval, major_interval = _t.choose_intervals(lo, hi, slope, interval, major_interval)
+            slope = median_slope(*cells) if cells else float("nan")
+    lo, hi, interval, major_interval = choose_intervals(lo, hi, slope, interval, major_interval)
     return lo, hi, interval, major_interval
 
 
 def _relief_block(heights: np.ndarray, **opts) -> np.ndarray:
-    return hillshade(_t._fill_ring(heights), **opts)
+    return hillshade(fill_nodata_ring(heights), **opts)
 
 
 def lazy_topographic_map(
@@ -106,13 +93,13 @@ def lazy_topographic_map(
     z = d.heights
     dx, dy = d.pixel_size
     lo, hi, interval, major_interval = _statistics(z, interval, major_interval, vmin, vmax)
-    tables = _t.map_band_tables(
+    tables = map_band_tables(
         bands, interval, major_interval, cmap, lo if vmin is None else vmin,
         hi if vmax is None else vmax, sea_level,
     )  # fmt: skip
     layers: dict[str, object] = {}
     if contours:
-        layers["ink"] = _t.map_contours(
+        layers["ink"] = map_contours(
             z,
             interval=interval,
             major_interval=major_interval,
@@ -133,7 +120,7 @@ def lazy_topographic_map(
             dy=dy,
             **light,
         )
-        flat = max(_t._flat_shade(dx=dx, dy=dy, **light), 1e-3)
+        flat = max(flat_shade(dx=dx, dy=dy, **light), 1e-3)
         if sky_view:
             layers["sky"] = sky_view_factor(z, dx=dx, dy=dy, z_factor=z_factor)
     # Layers whose halo was wider than a chunk come back coarser: back to the map's chunks.
@@ -145,7 +132,7 @@ def lazy_topographic_map(
         lay = dict(zip(names, parts, strict=True))
         lay.update(tables=tables if has_tables else None, relief=relief, flat=flat)
         lay.setdefault("ink", None)
-        return _t.composite(lay, heights, colour)
+        return composite(lay, heights, colour)
 
     return da.map_blocks(
         block,

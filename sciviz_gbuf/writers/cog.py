@@ -20,8 +20,11 @@ from typing import Any
 
 import numpy as np
 
+from .. import _dask
 from .._progress import progress
 from ..errors import InputError, SciVizGBufError
+from .geotiff import georeference, rasterio_crs
+from .png import to_uint8, write_png
 
 __all__ = ["local_client", "write_cog"]
 
@@ -171,7 +174,7 @@ def write_cog(
     pixels = _as_uint8(image)
     h, w, c = pixels.shape
     profile = _profile(h, w, c, dem, transform, crs)
-    is_lazy = _is_dask(pixels)
+    is_lazy = _dask.is_dask(pixels)
     if is_lazy:
         pixels = _aligned(pixels)
         n_blocks = len(pixels.chunks[0]) * len(pixels.chunks[1])
@@ -261,15 +264,9 @@ def _png_path(path: str | os.PathLike) -> Path:
     return p
 
 
-def _is_dask(x: object) -> bool:
-    return type(x).__module__.startswith("dask.array") and hasattr(x, "chunks")
-
-
 def _as_uint8(image: Any):
     """(H, W, C) uint8, C in 1, 3, 4: numpy converted now, dask lazily (per block)."""
-    if not _is_dask(image):
-        from ..compose import to_uint8
-
+    if not _dask.is_dask(image):
         a = to_uint8(image)  # checks shape and dtype with write_geotiff's messages
         return a[..., None] if a.ndim == 2 else a
     if not (image.ndim == 2 or (image.ndim == 3 and image.shape[2] in (3, 4))):
@@ -279,8 +276,6 @@ def _as_uint8(image: Any):
     if image.dtype == np.bool_:
         image = image.astype(np.uint8) * np.uint8(255)
     elif np.issubdtype(image.dtype, np.floating):
-        from ..compose import to_uint8
-
         image = image.map_blocks(to_uint8, dtype=np.uint8)
     elif image.dtype != np.uint8:
         raise InputError(f"image: expected float in [0, 1], uint8 or bool, got dtype {image.dtype}")
@@ -305,11 +300,9 @@ def _profile(h: int, w: int, c: int, dem: Any, transform: Any, crs: Any) -> dict
     """rasterio profile of the temporary tiled GeoTIFF, georeference checked."""
     from rasterio.transform import Affine
 
-    from ..compose import _transform, rasterio_crs
-
     if dem is not None and transform is None and crs is None and tuple(dem.shape) != (h, w):
         raise InputError(f"dem: its shape {tuple(dem.shape)} is not the image's {(h, w)}")
-    gt = _transform(dem, transform, crs, "write_cog")
+    gt = georeference(dem, transform, crs, "write_cog")
     crs_obj = rasterio_crs(dem.crs if dem is not None else crs)
     profile = {
         "driver": "GTiff",
@@ -459,8 +452,6 @@ def _overview_png(cog: Path, png: Path, size: int) -> None:
     """A PNG of at most ``size`` pixels on its long side, from the COG's overview levels."""
     import rasterio
     from rasterio.enums import Resampling
-
-    from ..compose import write_png
 
     with rasterio.open(cog) as src:
         h, w = src.shape

@@ -1,115 +1,78 @@
-"""A PNG encoder for large images that compresses blocks of rows on several threads.
-
-Pillow deflates a PNG on one thread at level 6: 24 s for an 8192² RGBA map. Here each block of
-rows is deflated separately (zlib releases the GIL) and the blocks are joined into the single
-zlib stream PNG requires, as ``pigz`` does: every block but the last ends with a sync flush, so
-the raw deflate streams concatenate, and the Adler-32 of the whole is computed alongside.
-Rows use PNG's "Up" filter, computed with numpy, which suits maps (large areas of one colour).
-Deflate is ISA-L's (the ``isal`` package: 6x zlib's speed at level 1, output 4% larger) when
-installed, else zlib's.
-"""
+"""PNG files of images: float in [0, 1], uint8 or bool; large ones encoded on several threads."""
 
 from __future__ import annotations
 
 import os
-import struct
-import zlib
-from collections.abc import Iterator
-from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
 
-__all__ = ["encode_png", "write_png_fast"]
+from ..errors import InputError
+from ._png_encoder import write_png_fast
 
-try:
-    from isal import isal_zlib as _deflate
-except ImportError:  # pragma: no cover - isal is a dependency; zlib is the fallback
-    _deflate = zlib
+__all__ = ["LARGE_IMAGE", "check_image", "to_uint8", "write_png"]
 
-_COLOUR_TYPE = {1: 0, 2: 4, 3: 2, 4: 6}  # channels -> grey, grey+alpha, RGB, RGBA
-_BLOCK_ROWS = 256
+#: Images of at least this many pixels are encoded fast (multithreaded, low zlib level).
+LARGE_IMAGE = 4_000_000
 
 
-def _chunk(kind: bytes, data: bytes) -> bytes:
-    return (
-        struct.pack(">I", len(data))
-        + kind
-        + data
-        + struct.pack(">I", zlib.crc32(data, zlib.crc32(kind)))
-    )
+def check_image(image: object, name: str = "image") -> np.ndarray:
+    """An image the writers take: (H, W), (H, W, 3) or (H, W, 4); float, uint8 or bool."""
+    a = np.asarray(image)
+    ok_shape = a.ndim == 2 or (a.ndim == 3 and a.shape[2] in (3, 4))
+    if not ok_shape or a.size == 0:
+        raise InputError(f"{name}: expected shape (H, W), (H, W, 3) or (H, W, 4), got {a.shape}")
+    if a.dtype not in (np.uint8, np.bool_) and not np.issubdtype(a.dtype, np.floating):
+        raise InputError(f"{name}: expected float in [0, 1], uint8 or bool, got dtype {a.dtype}")
+    return a
 
 
-def _filtered_block(a: np.ndarray, r0: int, r1: int) -> bytes:
-    """Rows ``r0:r1`` with PNG filter type 2 (Up): each byte minus the byte above, mod 256."""
-    rows = a[r0:r1].reshape(r1 - r0, -1)
-    above = a[r0 - 1 : r1 - 1].reshape(r1 - r0, -1) if r0 > 0 else None
-    out = np.empty((r1 - r0, rows.shape[1] + 1), dtype=np.uint8)
-    out[:, 0] = 2
-    if above is None:
-        out[0, 1:] = rows[0]
-        np.subtract(rows[1:], rows[:-1], out=out[1:, 1:])
-    else:
-        np.subtract(rows, above, out=out[:, 1:])
-    return out.tobytes()
+def to_uint8(rgb: np.ndarray) -> np.ndarray:
+    """Convert an image to 8 bits: float ``[0, 1]`` -> ``round(255 x)``; bool -> 0/255.
 
+    Parameters
+    ----------
+    rgb : (H, W), (H, W, 3) or (H, W, 4) array_like
+        Float in ``[0, 1]`` (values outside are clipped), uint8 (copied) or bool.
 
-def _adler32_combine(a1: int, a2: int, len2: int) -> int:
-    """Adler-32 of two byte strings joined, from theirs (zlib's ``adler32_combine``)."""
-    base = 65521
-    rem = len2 % base
-    s1 = a1 & 0xFFFF
-    s2 = (rem * s1) % base
-    s1 = (s1 + (a2 & 0xFFFF) + base - 1) % base
-    s2 = (s2 + ((a1 >> 16) & 0xFFFF) + ((a2 >> 16) & 0xFFFF) + base - rem) % base
-    return s1 | (s2 << 16)
-
-
-def _idat_parts(a: np.ndarray, level: int, threads: int | None) -> Iterator[bytes]:
-    """The PNG's IDAT chunks, in order: the zlib header, one chunk per block of rows (filtered,
-    deflated and CRC'd on the worker threads, never joined into one big string), the Adler-32.
+    Returns
+    -------
+    uint8 ndarray of the same shape
     """
-    h = a.shape[0]
-    starts = list(range(0, h, _BLOCK_ROWS))
-    lvl = min(max(level, 0), 3)
-
-    def deflate(r0: int) -> tuple[bytes, int, int]:
-        raw = _filtered_block(a, r0, min(r0 + _BLOCK_ROWS, h))
-        comp = _deflate.compressobj(lvl, zlib.DEFLATED, -15)
-        mode = _deflate.Z_FINISH if r0 == starts[-1] else _deflate.Z_FULL_FLUSH
-        data = comp.compress(raw) + comp.flush(mode)
-        return _chunk(b"IDAT", data), _deflate.adler32(raw), len(raw)
-
-    n = threads or min(len(starts), os.cpu_count() or 1)
-    yield _chunk(b"IDAT", b"\x78\x01")
-    adler = 1
-    with ThreadPoolExecutor(max_workers=max(n, 1)) as pool:
-        for chunk, part_adler, size in pool.map(deflate, starts):
-            adler = _adler32_combine(adler, part_adler, size)
-            yield chunk
-    yield _chunk(b"IDAT", struct.pack(">I", adler))
+    a = check_image(rgb, "rgb")
+    if a.dtype == np.uint8:
+        return a.copy()
+    if a.dtype == np.bool_:
+        return np.where(a, np.uint8(255), np.uint8(0))
+    if not np.isfinite(a).all():
+        raise InputError("rgb: expected finite values in [0, 1], got NaN or infinity")
+    return np.rint(np.clip(a, 0.0, 1.0) * 255.0).astype(np.uint8)
 
 
-def _pieces(image: np.ndarray, level: int, threads: int | None) -> Iterator[bytes]:
-    a = np.ascontiguousarray(image, dtype=np.uint8)
-    if a.ndim == 2:
-        a = a[..., None]
-    h, w, c = a.shape
-    header = struct.pack(">IIBBBBB", w, h, 8, _COLOUR_TYPE[c], 0, 0, 0)
-    yield b"\x89PNG\r\n\x1a\n" + _chunk(b"IHDR", header)
-    yield from _idat_parts(a, level, threads)
-    yield _chunk(b"IEND", b"")
+def write_png(path: str | os.PathLike, image: np.ndarray) -> Path:
+    """Write an image as PNG with Pillow.
 
+    Parameters
+    ----------
+    path : str or path-like
+        Output file; its directory must exist.
+    image : (H, W), (H, W, 3) or (H, W, 4) array_like
+        Float in ``[0, 1]``, uint8 or bool (grey, RGB or RGBA).
 
-def encode_png(image: np.ndarray, *, level: int = 1, threads: int | None = None) -> bytes:
-    """PNG bytes of a uint8 image ``(H, W)``, ``(H, W, 2)``, ``(H, W, 3)`` or ``(H, W, 4)``;
-    ``level`` 0-3 (ISA-L's range; zlib's levels above 3 are not used)."""
-    return b"".join(_pieces(image, level, threads))
+    Returns
+    -------
+    pathlib.Path
+        The path written.
+    """
+    from PIL import Image
 
-
-def write_png_fast(path: Path, image: np.ndarray, *, level: int = 1) -> Path:
-    """Write the PNG of :func:`encode_png` to ``path`` chunk by chunk, as blocks finish."""
-    with open(path, "wb") as f:
-        for piece in _pieces(image, level, None):
-            f.write(piece)
-    return path
+    p = Path(path)
+    if p.suffix.lower() != ".png":
+        raise InputError(f"path: expected a file name ending in .png, got {str(p)!r}")
+    if not p.parent.is_dir():
+        raise InputError(f"path: no such directory {str(p.parent)!r}")
+    pixels = to_uint8(image)
+    if pixels.shape[0] * pixels.shape[1] >= LARGE_IMAGE:
+        return write_png_fast(p, pixels)
+    Image.fromarray(pixels).save(p, format="PNG")
+    return p

@@ -1,0 +1,249 @@
+"""The layers of a plan-view map and their one-pass composite, shared by the in-memory
+(:mod:`.terrain`) and the chunked (:mod:`.terrain_chunked`) topographic maps and the bird's-eye
+recipes."""
+
+from __future__ import annotations
+
+import math
+import os
+
+import numpy as np
+
+from .. import _dask, _validate
+from ..errors import InputError
+from ..filters import cast_shadows, composite_map, contour_lines, fill_nodata_ring, hillshade
+from ..filters import sky_view as sky_view_factor
+from ..filters.bands import band_tables
+from ..readers import DEM, read_dem
+from ._intervals import contour_intervals
+
+__all__ = [
+    "CONTOUR_COLOR",
+    "as_dem",
+    "check_bands",
+    "composite",
+    "flat_shade",
+    "lazy_dem",
+    "lit",
+    "map_band_tables",
+    "map_contours",
+    "map_layers",
+    "relief_light",
+    "rgba",
+]
+
+
+#: Dark brown, the colour of contour lines on most topographic maps.
+CONTOUR_COLOR = (0.36, 0.20, 0.08)
+
+
+def as_dem(dem: DEM | str | os.PathLike | np.ndarray) -> DEM:
+    """A :class:`~sciviz_gbuf.readers.DEM` as is; a dask array kept lazy (1 m pixels);
+    anything else through :func:`~sciviz_gbuf.readers.read_dem` (a file, an array in metres,
+    an xarray DataArray)."""
+    if isinstance(dem, DEM):
+        return dem
+    if _dask.is_dask(dem):
+        return lazy_dem(dem)
+    return read_dem(dem)
+
+
+def relief_light(direct: np.ndarray, ambient: np.ndarray | float = 1.0) -> np.ndarray:
+    """Light of a relief relative to open flat ground (1 there): two parts sun, ``direct`` (the
+    shade over that of flat ground, 0 in cast shadow), to one part sky, ``ambient``."""
+    return (np.float32(1 / 3) * ambient + np.float32(2 / 3) * direct).astype(np.float32)
+
+
+def lit(rgb: np.ndarray, light: np.ndarray) -> np.ndarray:
+    """Colours under a relief ``light``: below 1 it multiplies; above 1 (slopes facing the sun)
+    it lifts the colour up to halfway towards white. NaN light leaves the colour as it is."""
+    lt = np.nan_to_num(light, nan=1.0)[..., None]
+    return rgb * np.minimum(lt, 1.0) + (1.0 - rgb) * (0.5 * np.clip(lt - 1.0, 0.0, 1.0))
+
+
+def flat_shade(**opts) -> float:
+    """The hillshade of flat ground for these options (``sin(altitude)`` for most variants)."""
+    return float(hillshade(np.zeros((3, 3), np.float32), **opts)[1, 1])
+
+
+def check_bands(bands, major: float):
+    """``bands`` -> the ``interval=``/``levels=`` options of the band colours (empty for a
+    continuous ramp), or None for no bands."""
+    if bands is False or bands is None:
+        return None
+    if bands is True:
+        return {"interval": major}
+    if isinstance(bands, str):
+        if bands == "continuous":
+            return {}
+        raise InputError(
+            f"bands: expected True, False, 'continuous', an interval or a list of levels, "
+            f"got {bands!r}"
+        )
+    if np.ndim(bands) == 0:
+        try:
+            v = float(bands)
+        except (TypeError, ValueError):
+            v = float("nan")
+        if not (math.isfinite(v) and v > 0):
+            raise InputError(f"bands: expected an interval > 0, got {bands!r}")
+        return {"interval": v}
+    try:
+        levels = np.asarray(bands, dtype=np.float64).ravel()
+    except (TypeError, ValueError):
+        levels = np.array([np.nan])
+    if levels.size == 0 or not np.isfinite(levels).all():
+        raise InputError(f"bands: expected finite band edges, got {bands!r}")
+    return {"levels": levels}
+
+
+def map_layers(
+    heights: np.ndarray,
+    *,
+    dx: float,
+    dy: float,
+    interval: float | None,
+    major_interval: float | None,
+    contours: bool,
+    width: float,
+    major_width: float,
+    dense_spacing: float,
+    bands: object,
+    cmap: object,
+    sea_level: float | None,
+    relief: bool,
+    azimuth: float,
+    altitude: float,
+    z_factor: float,
+    variant: str,
+    shadows: bool,
+    sky_view: bool,
+    vmin: float | None = None,
+    vmax: float | None = None,
+    bar=None,
+) -> dict[str, np.ndarray | None]:
+    """The layers of a plan-view map, see :func:`topographic_map`: ``ink`` (contours or None),
+    ``sh`` (hillshade), ``flat`` (its value on flat ground), ``lit`` (cast shadows), ``sky``
+    (sky view) when asked for, and ``tables`` (the band colours' kernel arguments, or None).
+    Every option is checked before the work starts."""
+    z = heights
+    lo, hi, interval, major_interval = contour_intervals(z, interval, major_interval)
+    layers: dict[str, object] = {"ink": None, "relief": relief}
+    layers["tables"] = map_band_tables(
+        bands, interval, major_interval, cmap, lo if vmin is None else vmin,
+        hi if vmax is None else vmax, sea_level,
+    )  # fmt: skip
+    if contours:
+        layers["ink"] = map_contours(
+            z,
+            interval=interval,
+            major_interval=major_interval,
+            width=width,
+            major_width=major_width,
+            dense_spacing=dense_spacing,
+        )
+    if bar is not None:
+        bar.step("relief")
+    if relief:
+        opts = {"azimuth": azimuth, "altitude": altitude, "z_factor": z_factor, "variant": variant}
+        layers["sh"] = hillshade(fill_nodata_ring(z), dx=dx, dy=dy, **opts)
+        layers["flat"] = max(flat_shade(dx=dx, dy=dy, **opts), 1e-3)
+        if shadows:
+            layers["lit"] = cast_shadows(
+                z, dx=dx, dy=dy, azimuth=azimuth, altitude=altitude, z_factor=z_factor
+            )
+        if sky_view:
+            layers["sky"] = sky_view_factor(z, dx=dx, dy=dy, z_factor=z_factor)
+    return layers
+
+
+def map_band_tables(bands, interval, major_interval, cmap, vmin, vmax, sea_level):
+    """The band colours' kernel arguments of a map (None for no bands): one band per major
+    interval (five minors) unless ``bands`` says otherwise (see :func:`topographic_map`)."""
+    band_interval = major_interval if major_interval is not None else 5.0 * float(interval)
+    opts = check_bands(bands, band_interval)
+    if opts is None:
+        return None
+    return band_tables(
+        np.zeros(1, np.float32),  # unused: the range is given
+        interval=opts.get("interval"),
+        levels=opts.get("levels"),
+        base=0.0,
+        cmap=cmap,
+        vmin=vmin,
+        vmax=vmax,
+        sea_level=sea_level,
+        sea_cmap=None,
+    )
+
+
+def map_contours(
+    z,
+    *,
+    interval: float,
+    major_interval: float | None,
+    width: float,
+    major_width: float,
+    dense_spacing: float,
+):
+    """The contour ink of a map (numpy or dask heights): majors never thin out, minors fade
+    where they crowd closer than ``dense_spacing`` (Eq. 15, Fig. 11); without a major interval
+    the one family fades like minors."""
+    if major_interval is None:
+        return contour_lines(
+            z, interval=interval, width=width, c_dense=0.0, dense_spacing=dense_spacing
+        )
+    return contour_lines(
+        z,
+        interval=interval,
+        major_interval=major_interval,
+        width=width,
+        major_width=major_width,
+        dense_spacing=dense_spacing,
+    )
+
+
+def composite(layers: dict, heights: np.ndarray, colour: np.ndarray) -> np.ndarray:
+    """The map's layers (of :func:`map_layers`) into one RGBA uint8 image in one fused pass
+    (:func:`~sciviz_gbuf.filters.composite_map`; no float image of the whole map is made)."""
+    return composite_map(
+        heights,
+        tables=layers["tables"],
+        relief=layers["sh"] if layers["relief"] else None,
+        flat=layers.get("flat", 1.0),
+        shadow=layers.get("lit"),
+        sky=layers.get("sky"),
+        ink=layers.get("ink"),
+        ink_color=colour,
+    )
+
+
+def lazy_dem(heights) -> DEM:
+    """A :class:`DEM` around a 2-D dask array of heights in metres on 1 m pixels (like an
+    in-memory array given to :func:`~sciviz_gbuf.readers.read_dem`), kept lazy: float32 with
+    NaN at non-finite values."""
+    import dask.array as da
+
+    z = _dask.as_dask("heights", heights, None)
+    if min(z.shape) == 0:
+        raise InputError(f"heights: expected a non-empty 2-D array, got shape {z.shape}")
+    z = z.astype(np.float32)
+    z = da.where(da.isinf(z), np.float32(np.nan), z)
+    h = z.shape[0]
+    return DEM(z, da.isfinite(z), None, (0.0, 1.0, 0.0, float(h), 0.0, -1.0), (1.0, 1.0), False)
+
+
+def rgba(rgb: np.ndarray, alpha: np.ndarray, background) -> np.ndarray:
+    """uint8 RGBA: ``rgb`` with coverage ``alpha``, transparent where nothing was rendered (or
+    over an opaque ``background`` colour)."""
+    rgb = np.clip(np.asarray(rgb, np.float32), 0.0, 1.0)
+    if rgb.ndim == 2:
+        rgb = np.repeat(rgb[..., None], 3, axis=2)
+    a = np.clip(alpha, 0.0, 1.0)[..., None]
+    if background is not None:
+        bg = _validate.rgb(background, "background")
+        rgb, a = rgb * a + bg * (1.0 - a), np.ones_like(a)
+    out = np.empty((*rgb.shape[:2], 4), dtype=np.uint8)
+    out[..., :3] = np.rint(rgb * 255.0)
+    out[..., 3] = np.rint(a[..., 0] * 255.0)
+    return out

@@ -1,0 +1,120 @@
+"""Georeferenced GeoTIFF files of images (rasterio), and the georeference checks that the
+Cloud-Optimized GeoTIFF writer shares."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+from .png import LARGE_IMAGE, to_uint8
+
+__all__ = ["georeference", "rasterio_crs", "write_geotiff"]
+
+
+def georeference(dem: object, transform: object, crs: object, who: str) -> np.ndarray:
+    """The checked GDAL geotransform of ``dem=`` or ``transform=`` (exactly one of them)."""
+    if dem is not None:
+        if transform is not None or crs is not None:
+            raise InputError(f"{who}: give dem= or transform=/crs=, not both")
+        transform = dem.transform
+    if transform is None:
+        raise InputError(f"{who}: a georeference is needed: pass dem= or transform=")
+    gt = np.asarray(transform, dtype=np.float64).reshape(-1)
+    if gt.size != 6 or not np.isfinite(gt).all() or gt[1] == 0 or gt[5] == 0:
+        raise InputError(
+            f"transform: expected a GDAL 6-tuple with non-zero pixel size, got {transform!r}"
+        )
+    return gt
+
+
+def rasterio_crs(crs: object):
+    """``crs`` (EPSG code, WKT, ...) as a rasterio CRS, None as None; InputError if unreadable."""
+    from rasterio.crs import CRS
+
+    try:
+        return None if crs is None else CRS.from_user_input(crs)
+    except Exception as exc:  # rasterio raises its own CRSError family
+        raise InputError(f"crs: rasterio cannot read {str(crs)[:80]!r}: {exc}") from exc
+
+
+def write_geotiff(
+    path: str | os.PathLike,
+    image: np.ndarray,
+    *,
+    dem: object = None,
+    transform: Sequence[float] | None = None,
+    crs: str | None = None,
+) -> Path:
+    """Write an image as a georeferenced, tiled, deflate-compressed GeoTIFF (needs rasterio).
+
+    Parameters
+    ----------
+    path : str or path-like
+        Output file (``.tif``/``.tiff``); its directory must exist.
+    image : (H, W), (H, W, 3) or (H, W, 4) array_like
+        Float in ``[0, 1]``, uint8 or bool; written as 8-bit grey, RGB or RGBA (the fourth band
+        tagged as alpha, so GIS software shows nodata as transparent).
+    dem : sciviz_gbuf.readers.DEM, optional
+        Take ``transform`` and ``crs`` from this DEM (the grid the image was made on).
+    transform : 6 floats, optional
+        GDAL geotransform of the pixel corners.
+    crs : str, optional
+        Anything rasterio's ``CRS.from_user_input`` accepts (``"EPSG:4326"``, WKT).
+
+    Returns
+    -------
+    pathlib.Path
+    """
+    p = Path(path)
+    if p.suffix.lower() not in (".tif", ".tiff"):
+        raise InputError(f"path: expected a file name ending in .tif or .tiff, got {str(p)!r}")
+    if not p.parent.is_dir():
+        raise InputError(f"path: no such directory {str(p.parent)!r}")
+    gt = georeference(dem, transform, crs, "write_geotiff")
+    pixels = to_uint8(image)
+    if pixels.ndim == 2:
+        pixels = pixels[..., None]
+    try:
+        import rasterio
+        from rasterio.enums import ColorInterp
+        from rasterio.transform import Affine
+    except ImportError as exc:
+        raise InputError(
+            f"{p}: writing GeoTIFF needs rasterio: pip install 'sciviz-gbuf[geo]'"
+        ) from exc
+    crs_obj = rasterio_crs(dem.crs if dem is not None else crs)
+    h, w, c = pixels.shape
+    profile = {
+        "driver": "GTiff",
+        "width": w,
+        "height": h,
+        "count": c,
+        "dtype": "uint8",
+        "crs": crs_obj,
+        "transform": Affine.from_gdal(*gt),
+        "compress": "deflate",
+        "zlevel": 1 if h * w >= LARGE_IMAGE else 6,
+        "predictor": 2,
+        "num_threads": "ALL_CPUS",
+        "interleave": "pixel",
+    }
+    if h >= 256 and w >= 256:
+        profile.update(tiled=True, blockxsize=256, blockysize=256)
+    if c >= 3:
+        profile["photometric"] = "RGB"
+    if c in (2, 4):
+        profile["alpha"] = "unassociated"
+    interp = {
+        1: [ColorInterp.gray],
+        2: [ColorInterp.gray, ColorInterp.alpha],
+        3: [ColorInterp.red, ColorInterp.green, ColorInterp.blue],
+        4: [ColorInterp.red, ColorInterp.green, ColorInterp.blue, ColorInterp.alpha],
+    }[c]
+    with rasterio.open(p, "w", **profile) as dst:
+        dst.colorinterp = interp  # before the pixels: GDAL fixes the TIFF's ExtraSamples then
+        dst.write(np.moveaxis(pixels, 2, 0))
+    return p
