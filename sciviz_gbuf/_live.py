@@ -42,6 +42,7 @@ from .core.capture import capture
 from .core.gbuffer import GBuffer
 from .errors import InputError
 from .filters import crease_edges, edge_map, profile_edges
+from .styles import check_style, styles_for
 from .styles.illustration import fig7_edge_map
 
 __all__ = [
@@ -64,13 +65,9 @@ CLIENT_SIDE_WARNING = (
     "or 'trame' (server rendering, PyVista's default) to see it."
 )
 
-#: Styles of the live overlay (an RGBA image composited over the normal rendering).
-LIVE_STYLES = {
-    "enhance": "inner edges in inner_color, profiles in profile_color (2003 edge map)",
-    "profile": "profiles (silhouettes, borders, occlusions) only, in profile_color",
-    "lines": "profile and crease lines, all in profile_color",
-    "fig7": "convex edges in inner_color; concave edges and profiles in profile_color (1990)",
-}
+#: Styles of the live overlay (an RGBA image composited over the normal rendering), from the
+#: styles registry.
+LIVE_STYLES = styles_for("live")
 
 
 def _color(value: object, name: str) -> tuple[float, float, float]:
@@ -109,8 +106,7 @@ class EdgeParams:
         opacity: float,
     ) -> EdgeParams:
         """Validate everything up front: a bad value must fail at the call, not mid-frame."""
-        if style not in LIVE_STYLES:
-            raise InputError(f"style: expected one of {sorted(LIVE_STYLES)}, got {style!r}")
+        style = check_style(style, "live")
         if operator not in ("diagonal", "c1"):
             raise InputError(f"operator: expected 'diagonal' or 'c1', got {operator!r}")
         if (

@@ -6,7 +6,7 @@ import numpy as np
 import pyvista as pv
 
 from .errors import InputError
-from .readers import metres_per_degree
+from .readers import DEM, metres_per_degree, read_dem
 
 __all__ = [
     "load_frog_skeleton",
@@ -98,8 +98,6 @@ def load_jacksboro_dem():
 
     from matplotlib import cbook
 
-    from .readers import read_dem
-
     path = cbook.get_sample_data("jacksboro_fault_dem.npz", asfileobj=False)
     return dataclasses.replace(read_dem(path, geographic=True), crs="EPSG:4326")
 
@@ -163,8 +161,6 @@ def synthetic_dem(shape: tuple[int, int], *, chunks: int | tuple[int, int] = 204
         the origin at (0, 0).
     """
     import dask.array as da
-
-    from .readers import DEM
 
     try:
         rows, cols = (int(v) for v in shape)

@@ -38,7 +38,7 @@ from .core.gbuffer import GBuffer
 from .errors import InputError
 from .readers.dem import read_dem
 from .recipes.terrain import topographic_map as _topographic_map
-from .styles.illustration import STYLES, illustrate
+from .styles import check_style, illustrate
 
 __all__ = ["ACCESSOR_NAME", "GBufAccessor", "GBufPlotterComponent", "register"]
 
@@ -170,8 +170,7 @@ class GBufAccessor:
             ``edgemap``: RGB inner edges, A profiles), active, so ``.plot(rgb=True)`` or
             ``.save("x.png")`` work directly.
         """
-        if style not in STYLES:
-            raise InputError(f"style: expected one of {sorted(STYLES)}, got {style!r}")
+        style = check_style(style, "illustrate")
         if _is_gbuffer_image(self._dataset):
             if window_size is not None or camera is not None or supersample != 1:
                 raise InputError(

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import base64
 import dataclasses
-import inspect
 import io
 import math
 import os
@@ -22,19 +21,19 @@ from pathlib import Path
 
 import numpy as np
 import pyvista as pv
-from numba import njit, prange
 
 from ..compose import to_uint8
 from ..core.capture import capture
 from ..core.gbuffer import GBuffer
 from ..datasets import load_nut
 from ..errors import InputError
-from ..filters import color_bands, contour_lines, crease_edges, edge_map, enhance, profile_edges
+from ..filters import color_bands, contour_lines, crease_edges, edge_map, profile_edges
 from ..readers import DEM, kind_of, read_dem, read_scene, suffixes
 from ..recipes.medical import ct_surface
 from ..recipes.terrain import CONTOUR_COLOR, composite, contour_intervals, map_layers
-from ..styles import gooch, hatch, toon
-from ..styles.illustration import fig7_edge_map, illustrate, shade_image
+from ..styles import check_style, gooch, hatch, styles_for, toon
+from ..styles.fused import fused_style, rgba_on_paper
+from ..styles.illustration import fig7_edge_map, illustrate
 
 __all__ = [
     "DEM_SUFFIXES",
@@ -48,15 +47,8 @@ __all__ = [
     "style_image",
 ]
 
-#: Style name -> one-line description (the first three are :func:`illustrate`'s).
-STYLES = {
-    "enhance": "shaded, white inner edges, black profiles (2003 edge map)",
-    "lines": "black profile and crease lines on white paper",
-    "fig7": "shaded, convex edges white, concave edges and profiles black (1990 Fig. 7)",
-    "gooch": "warm-cool technical illustration with the 2003 edge map",
-    "toon": "cartoon shading with black edges",
-    "hatch": "pen-and-ink hatching",
-}
+#: Style name -> one-line description (the explorer's styles of the styles registry).
+STYLES = styles_for("explore")
 #: File suffixes read as DEMs (from the readers' one format table).
 DEM_SUFFIXES = suffixes("dem")
 _CONTOUR_COLOR = np.array([0.45, 0.22, 0.05], dtype=np.float32)
@@ -126,8 +118,7 @@ class Params:
 
     def checked(self) -> Params:
         """These parameters, or an :class:`InputError` naming the first bad one."""
-        if self.style not in STYLES:
-            raise InputError(f"style: expected one of {sorted(STYLES)}, got {self.style!r}")
+        check_style(self.style, "explore")
         for name, low, strict in (
             ("crease_angle", 0.0, True),
             ("depth_jump", 0.0, True),
@@ -394,10 +385,8 @@ class Explorer:
             return style_image(gb, p, height_range=self.height_range)  # not the explorer's own
         edges = {"crease_angle": p.crease_angle, "depth_jump": p.depth_jump, "width": p.width}
         ekey = tuple(edges.values())
-        consts = _CONSTANTS
         empty2, empty3 = np.zeros((0, 0), np.float32), np.zeros((0, 0, 0), np.float32)
         layer, emap = empty2, empty3
-        inner = prof = np.zeros(3, np.float32)
         if p.style in ("enhance", "gooch", "toon"):
             emap = self._layer(("emap", *ekey), lambda: edge_map(gb, **edges))
         elif p.style == "fig7":
@@ -412,8 +401,6 @@ class Explorer:
             )
         else:
             layer = self._layer(("hatch", p.width), lambda: profile_edges(gb, width=p.width))
-        if emap.size:
-            inner, prof = consts["edge_colors"][p.style]
         lo, hi = self.height_range
         tint = empty3
         if p.bands > 0:
@@ -431,25 +418,17 @@ class Explorer:
                 ),
             )
         out = np.empty((*gb.output_shape, 3), dtype=np.uint8)
-        _compose_kernel(
-            _MODE[p.style],
+        fused_style(
+            p.style,
             gb.normal,
             gb.mask,
-            np.asarray(p.light(), np.float32),
-            consts["gooch"],
-            consts["toon"],
-            consts["toon_bg"],
-            consts["hatch"],
-            consts["hatch_spacing"],
-            consts["shade"],
-            np.ascontiguousarray(layer, np.float32),
-            np.ascontiguousarray(emap, np.float32),
-            inner,
-            prof,
-            np.ascontiguousarray(tint, np.float32),
-            np.ascontiguousarray(ink, np.float32),
-            _CONTOUR_COLOR,
-            out,
+            p.light(),
+            layer=layer if layer.size else None,
+            emap=emap if emap.size else None,
+            tint=tint if tint.size else None,
+            ink=ink if ink.size else None,
+            ink_color=_CONTOUR_COLOR,
+            out=out,
         )
         return out
 
@@ -497,7 +476,7 @@ class Explorer:
         layers["sh"], layers["flat"] = rel["sh"], rel["flat"]
         rgba = composite(layers, d.heights, np.asarray(CONTOUR_COLOR, np.float32))
         out = np.empty((*rgba.shape[:2], 3), dtype=np.uint8)
-        _rgb_on_paper(rgba, out)  # nodata (transparent in the map): white paper
+        rgba_on_paper(rgba, out)  # nodata (transparent in the map): white paper
         return out
 
     def _capture(self) -> None:
@@ -631,168 +610,3 @@ def style_image(
         ink = _contour_ink(gb, p.contour_interval, p.contour_width)
         rgb = rgb * (1.0 - ink) + _CONTOUR_COLOR * ink
     return to_uint8(np.clip(rgb, 0.0, 1.0))
-
-
-# -- the fused per-update kernel ------------------------------------------------------------
-
-# Base colour of each style in :func:`_compose_kernel`.
-_MODE = {"enhance": 0, "fig7": 0, "gooch": 1, "toon": 2, "hatch": 3, "lines": 4}
-
-
-def _defaults(func) -> dict:
-    """Keyword defaults of a style function: the kernel uses the styles' own constants."""
-    return {
-        k: v.default
-        for k, v in inspect.signature(func).parameters.items()
-        if v.default is not inspect.Parameter.empty
-    }
-
-
-def _style_constants() -> dict[str, np.ndarray]:
-    """The styles' default colours and shade tables as the kernel's float32 arguments."""
-    f32 = np.float32
-    g, t, h, s = _defaults(gooch), _defaults(toon), _defaults(hatch), _defaults(shade_image)
-    base = np.asarray(g["base"], f32)
-    k_cool = np.asarray(g["cool"], f32) + f32(g["alpha"]) * base
-    k_warm = np.asarray(g["warm"], f32) + f32(g["beta"]) * base
-    levels = int(t["levels"])
-    table = (np.arange(1, levels + 1, dtype=np.float64) / levels)[:, None] * np.asarray(
-        t["base"], np.float64
-    )[None, :]
-    angles = np.radians(np.asarray(h["angles"], np.float64))
-    e = _defaults(enhance)
-
-    def pair(d: dict) -> tuple[np.ndarray, np.ndarray]:
-        return np.asarray(d["inner_color"], f32), np.asarray(d["profile_color"], f32)
-
-    return {
-        "edge_colors": {"enhance": pair(e), "fig7": pair(e), "gooch": pair(g), "toon": pair(t)},
-        "gooch": np.stack([k_cool, k_warm, np.asarray(g["background"], f32)]).astype(f32),
-        "toon": table.astype(f32),
-        "toon_bg": np.asarray(t["background"], f32),
-        "hatch": np.stack([np.sin(angles), np.cos(angles)]).astype(np.float64),
-        "hatch_spacing": np.float64(h["spacing"]),
-        "shade": np.asarray([s["ambient"], s["highlight"]], f32),
-    }
-
-
-@njit(parallel=True, cache=True)
-def _compose_kernel(
-    mode,
-    normal,
-    mask,
-    light,
-    consts_gooch,
-    toon_table,
-    toon_bg,
-    hatch_sc,
-    hatch_spacing,
-    shade_c,
-    layer,
-    emap,
-    inner_c,
-    prof_c,
-    tint,
-    ink,
-    ink_c,
-    out,
-):
-    """One pass per pixel: the style's base colour from ``N.L`` (``mode``, see ``_MODE``),
-    then the edge map (``emap``, empty: none), the band ``tint`` and contour ``ink`` (empty:
-    none), to uint8 ``out``. ``layer``: the lines style's ink or hatch's profile ink."""
-    h, w = mask.shape
-    lx, ly, lz = light[0], light[1], light[2]
-    use_emap = emap.shape[0] > 0
-    use_tint = tint.shape[0] > 0
-    use_ink = ink.shape[0] > 0
-    one = np.float32(1.0)
-    zero = np.float32(0.0)
-    n_tex = toon_table.shape[0]
-    n_fam = hatch_sc.shape[1]
-    for i in prange(h):
-        for j in range(w):
-            r = g = b = one
-            if mode == 4:  # lines: ink on paper
-                r = g = b = one - layer[i, j]
-            elif mask[i, j]:
-                nx, ny, nz = normal[i, j, 0], normal[i, j, 1], normal[i, j, 2]
-                d = nx * lx + ny * ly + nz * lz
-                if mode == 0:  # Lambert shade below white (shade_image); NaN normal: paper
-                    if d == d:
-                        s = max(d, zero)
-                        v = shade_c[1] * (shade_c[0] + (one - shade_c[0]) * s)
-                        r = g = b = min(max(v, zero), one)
-                elif mode == 1:  # gooch: cool to warm over t = (1 + N.L) / 2
-                    if d != d:
-                        d = zero
-                    t = (one + min(max(d, -one), one)) * np.float32(0.5)
-                    r = min(max(t * consts_gooch[1, 0] + (one - t) * consts_gooch[0, 0], zero), one)
-                    g = min(max(t * consts_gooch[1, 1] + (one - t) * consts_gooch[0, 1], zero), one)
-                    b = min(max(t * consts_gooch[1, 2] + (one - t) * consts_gooch[0, 2], zero), one)
-                elif mode == 2:  # toon: nearest texel of max(N.L, 0)
-                    if d != d:
-                        d = zero
-                    s = max(min(d, one), zero)
-                    k = min(int(s * np.float32(n_tex)), n_tex - 1)
-                    r, g, b = toon_table[k, 0], toon_table[k, 1], toon_table[k, 2]
-                else:  # hatch: prioritised stroke families covering the tone 1 - shade
-                    tone = zero
-                    if d == d:
-                        tone = one - min(max(d, zero), one)
-                    left = one
-                    y = np.float64(h - 1 - i)
-                    x = np.float64(j)
-                    for f in range(n_fam):
-                        f0 = np.float32(f) / np.float32(n_fam)
-                        top = min(tone, f0 + np.float32(1.0 / n_fam))
-                        cov = min(max((top - f0) / (one - f0), zero), one)
-                        c = (-x * hatch_sc[0, f] + y * hatch_sc[1, f]) / hatch_spacing
-                        dist = np.float32(abs((c - np.rint(c)) * hatch_spacing))
-                        wd = max(cov * np.float32(hatch_spacing), zero)
-                        a = max((wd + one) * np.float32(0.5), one)
-                        left *= one - min(wd, one) * min(max(a - dist, zero), one)
-                    r = g = b = left
-            elif mode == 1:
-                r, g, b = consts_gooch[2, 0], consts_gooch[2, 1], consts_gooch[2, 2]
-            elif mode == 2:
-                r, g, b = toon_bg[0], toon_bg[1], toon_bg[2]
-            if mode == 3:
-                p = one - layer[i, j]
-                r, g, b = r * p, g * p, b * p
-            if use_emap:
-                e = emap[i, j, 0]
-                if e == e:
-                    e = min(max(e, zero), one)
-                    r += (inner_c[0] - r) * e
-                    g += (inner_c[1] - g) * e
-                    b += (inner_c[2] - b) * e
-                e = emap[i, j, 3]
-                if e == e:
-                    e = min(max(e, zero), one)
-                    r += (prof_c[0] - r) * e
-                    g += (prof_c[1] - g) * e
-                    b += (prof_c[2] - b) * e
-            if use_tint and mask[i, j]:
-                r, g, b = r * tint[i, j, 0], g * tint[i, j, 1], b * tint[i, j, 2]
-            if use_ink:
-                q = ink[i, j]
-                r = r * (one - q) + ink_c[0] * q
-                g = g * (one - q) + ink_c[1] * q
-                b = b * (one - q) + ink_c[2] * q
-            out[i, j, 0] = np.uint8(np.rint(min(max(r, zero), one) * np.float32(255.0)))
-            out[i, j, 1] = np.uint8(np.rint(min(max(g, zero), one) * np.float32(255.0)))
-            out[i, j, 2] = np.uint8(np.rint(min(max(b, zero), one) * np.float32(255.0)))
-
-
-@njit(parallel=True, cache=True)
-def _rgb_on_paper(rgba, out):
-    """``out``: the RGB of ``rgba``, white where it is fully transparent."""
-    h, w = out.shape[:2]
-    for i in prange(h):
-        for j in range(w):
-            clear = rgba[i, j, 3] == 0
-            for c in range(3):
-                out[i, j, c] = 255 if clear else rgba[i, j, c]
-
-
-_CONSTANTS = _style_constants()

@@ -5,6 +5,11 @@ from __future__ import annotations
 import argparse
 import time
 
+from ..compose import write_png
+from ..readers.dicom import dicom_report, read_dicom_series
+from ..recipes.medical import LAYOUTS, VIEWS, ct_enhance, ct_gbuffer
+from ._args import add_progress, number, png_output, positive_int, show_progress, size
+
 __all__ = ["add_ct"]
 
 
@@ -53,14 +58,9 @@ def _colour(text: str) -> tuple[float, float, float] | None:
 
 
 def _cmd_ct(args: argparse.Namespace) -> int:
-    from ..compose import write_png
-    from ..readers.dicom import dicom_report, read_dicom_series
-    from ..recipes.medical import ct_enhance, ct_gbuffer
-    from . import _png_output, _show_progress
-
-    out = _png_output(args.output)
+    out = png_output(args.output)
     t0 = time.perf_counter()
-    show = _show_progress(args)
+    show = show_progress(args)
     source = args.dicom[0] if len(args.dicom) == 1 else list(args.dicom)
     volume = read_dicom_series(
         source, series_uid=args.series, resample=args.resample, progress_bar=show
@@ -104,9 +104,6 @@ def _cmd_ct(args: argparse.Namespace) -> int:
 
 def add_ct(sub) -> None:
     """Add the ``ct`` sub-command to the ``sciviz-gbuf`` parser."""
-    from ..recipes.medical import LAYOUTS, VIEWS
-    from . import _add_progress, _number, _positive_int, _size
-
     p = sub.add_parser(
         "ct",
         help="enhanced CT bone/skin surface from a DICOM series (Saito & Takahashi 1990 Fig. 14)",
@@ -124,10 +121,8 @@ def add_ct(sub) -> None:
         default="anterior",
         help=f"anatomical view: {', '.join(VIEWS)}, or two joined by '-' (anterior-left)",
     )
-    p.add_argument("--size", type=_size, default=(1024, 1024), help="size of each picture WxH")
-    p.add_argument(
-        "--supersample", type=_positive_int, default=2, help="render at k times the size"
-    )
+    p.add_argument("--size", type=size, default=(1024, 1024), help="size of each picture WxH")
+    p.add_argument("--supersample", type=positive_int, default=2, help="render at k times the size")
     p.add_argument(
         "--layout", default="pair", choices=LAYOUTS, help="shaded + enhanced side by side (pair)"
     )
@@ -145,7 +140,7 @@ def add_ct(sub) -> None:
     p.add_argument("--contour-axis", choices=["x", "y", "z"], default=None)
     p.add_argument(
         "--contour-interval",
-        type=_number(lambda v: v > 0, "a distance in mm > 0"),
+        type=number(lambda v: v > 0, "a distance in mm > 0"),
         default=None,
         metavar="MM",
         help="distance between contour lines (default about 24 lines)",
@@ -160,5 +155,5 @@ def add_ct(sub) -> None:
     p.add_argument(
         "--save-gbuffer", default=None, metavar="FILE.npz", help="also save the G-buffers"
     )
-    _add_progress(p)
+    add_progress(p)
     p.set_defaults(func=_cmd_ct)

@@ -6,6 +6,13 @@ import argparse
 import time
 from pathlib import Path
 
+from ..compose import write_png
+from ..core.camera import VIEWS
+from ..core.capture import capture
+from ..readers import read_mesh
+from ..recipes.npr import STYLES, npr_image
+from ._args import add_progress, png_output, positive_int, show_progress, size
+
 __all__ = ["add_mesh"]
 
 
@@ -20,13 +27,7 @@ def _light(text: str) -> tuple[float, float, float]:
 
 
 def _cmd_mesh(args: argparse.Namespace) -> int:
-    from ..compose import write_png
-    from ..core.capture import capture
-    from ..readers import read_mesh
-    from ..recipes.npr import npr_image
-    from . import _png_output, _show_progress
-
-    out = _png_output(args.output)
+    out = png_output(args.output)
     t0 = time.perf_counter()
     meshes = [read_mesh(p) for p in args.mesh]
     options = {"light": args.light} if args.light is not None else {}
@@ -35,7 +36,7 @@ def _cmd_mesh(args: argparse.Namespace) -> int:
     if args.parallel:
         source = capture(
             meshes, window_size=args.size, camera=args.view, parallel_projection=True,
-            supersample=args.supersample, progress_bar=_show_progress(args),
+            supersample=args.supersample, progress_bar=show_progress(args),
         )  # fmt: skip
     else:
         source = meshes
@@ -45,7 +46,7 @@ def _cmd_mesh(args: argparse.Namespace) -> int:
         view=args.view,
         window_size=args.size,
         supersample=args.supersample,
-        progress_bar=_show_progress(args),
+        progress_bar=show_progress(args),
         **options,
     )
     write_png(out, image)
@@ -56,10 +57,6 @@ def _cmd_mesh(args: argparse.Namespace) -> int:
 
 def add_mesh(sub) -> None:
     """Add the ``mesh`` sub-command to the ``sciviz-gbuf`` parser."""
-    from ..core.camera import VIEWS
-    from ..recipes.npr import STYLES
-    from . import _add_progress, _positive_int, _size
-
     p = sub.add_parser(
         "mesh",
         help="draw a mesh file in an NPR style: gooch, toon, hatch or lines",
@@ -69,14 +66,17 @@ def add_mesh(sub) -> None:
     )
     p.add_argument("mesh", nargs="+", help="mesh file(s) (STL, PLY, OBJ, VTK, VTP, ...)")
     p.add_argument("-o", "--output", required=True, help="output image (.png)")
-    p.add_argument("--style", default="gooch", choices=list(STYLES), help="picture style")
+    p.add_argument(
+        "--style",
+        default="gooch",
+        choices=[*STYLES, "lines"],
+        help="picture style (lines: the old name of drawing)",
+    )
     p.add_argument("--view", default="iso", choices=sorted(VIEWS), help="view direction")
     p.add_argument("--parallel", action="store_true", help="orthographic projection")
-    p.add_argument("--size", type=_size, default=(1024, 768), help="image size WxH")
-    p.add_argument(
-        "--supersample", type=_positive_int, default=2, help="render at k times the size"
-    )
+    p.add_argument("--size", type=size, default=(1024, 768), help="image size WxH")
+    p.add_argument("--supersample", type=positive_int, default=2, help="render at k times the size")
     p.add_argument("--light", type=_light, default=None, help="eye-space light direction X,Y,Z")
-    p.add_argument("--levels", type=_positive_int, default=3, help="toon: shade levels")
-    _add_progress(p)
+    p.add_argument("--levels", type=positive_int, default=3, help="toon: shade levels")
+    add_progress(p)
     p.set_defaults(func=_cmd_mesh)

@@ -6,6 +6,11 @@ import argparse
 import time
 from pathlib import Path
 
+from ..compose import write_png
+from ..readers.patches import read_patches
+from ..recipes.surface import CURVATURES, MODES, surface_analysis, surface_gbuffer
+from ._args import add_progress, number, png_output, positive_int, show_progress, size
+
 __all__ = ["add_patches"]
 
 _AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
@@ -25,12 +30,7 @@ def _axis(text: str) -> tuple[float, float, float]:
 
 
 def _cmd_patches(args: argparse.Namespace) -> int:
-    from ..compose import write_png
-    from ..readers.patches import read_patches
-    from ..recipes.surface import surface_analysis, surface_gbuffer
-    from . import _png_output, _show_progress
-
-    out = _png_output(args.output)
+    out = png_output(args.output)
     t0 = time.perf_counter()
     patches = read_patches(args.file)
     gb = surface_gbuffer(
@@ -39,7 +39,7 @@ def _cmd_patches(args: argparse.Namespace) -> int:
         resolution=args.resolution,
         window_size=args.size,
         supersample=args.supersample,
-        progress_bar=_show_progress(args),
+        progress_bar=show_progress(args),
     )
     image = surface_analysis(
         gb,
@@ -60,9 +60,6 @@ def _cmd_patches(args: argparse.Namespace) -> int:
 
 def add_patches(sub) -> None:
     """Add the ``patches`` sub-command to the ``sciviz-gbuf`` parser."""
-    from ..recipes.surface import CURVATURES, MODES
-    from . import _add_progress, _number, _positive_int, _size
-
     p = sub.add_parser(
         "patches",
         help="surface analysis of Bezier patches: reflection lines, zebra, curvature (Fig. 15)",
@@ -74,29 +71,27 @@ def add_patches(sub) -> None:
     p.add_argument("-o", "--output", required=True, help="output image (.png)")
     p.add_argument("--mode", default="reflection", choices=MODES, help="what to draw")
     p.add_argument("--view", default="iso", help="iso, xy, xz, yz, yx, zx or zy")
-    p.add_argument("--size", type=_size, default=(1024, 768), help="image size WxH")
+    p.add_argument("--size", type=size, default=(1024, 768), help="image size WxH")
+    p.add_argument("--supersample", type=positive_int, default=2, help="render at k times the size")
     p.add_argument(
-        "--supersample", type=_positive_int, default=2, help="render at k times the size"
-    )
-    p.add_argument(
-        "--resolution", type=_positive_int, default=32, help="tessellation per patch and side"
+        "--resolution", type=positive_int, default=32, help="tessellation per patch and side"
     )
     p.add_argument(
         "--axis", type=_axis, default=(0.0, 0.0, 1.0), help="light-line direction (x|y|z|X,Y,Z)"
     )
     p.add_argument(
         "--stripes",
-        type=_number(lambda v: v >= 1, "a number >= 1"),
+        type=number(lambda v: v >= 1, "a number >= 1"),
         default=16.0,
         help="lines (or stripe pairs) per turn around the axis (default 16)",
     )
     p.add_argument(
         "--width",
-        type=_number(lambda v: v > 0, "a width in pixels > 0"),
+        type=number(lambda v: v > 0, "a width in pixels > 0"),
         default=1.5,
         help="line width in pixels (default 1.5)",
     )
     p.add_argument("--curvature", default="gaussian", choices=CURVATURES, help="curvature map")
     p.add_argument("--white", action="store_true", help="white background (default transparent)")
-    _add_progress(p)
+    add_progress(p)
     p.set_defaults(func=_cmd_patches)

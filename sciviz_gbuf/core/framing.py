@@ -7,6 +7,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..errors import InputError
+from .camera import VIEWS
 
 __all__ = ["framed_camera", "named_view_camera", "oblique_camera", "terrain_birdseye_camera"]
 
@@ -178,8 +179,6 @@ def named_view_camera(points: np.ndarray, view: str, *, aspect: float = 4 / 3) -
     """PyVista's named view (``"iso"``, ``"xy"``, ... as :func:`~sciviz_gbuf.capture` takes
     them) framed tightly on ``points`` rather than on their bounding sphere, so the object fills
     the picture (VTK's default 30 degree view angle)."""
-    from .camera import VIEWS
-
     if view not in VIEWS:
         raise InputError(f"view: expected one of {sorted(VIEWS)}, got {view!r}")
     direction, up = VIEWS[view]

@@ -35,6 +35,8 @@ from ..errors import InputError
 from . import _edge_kernels as _k
 
 __all__ = [
+    "INNER_COLOR",
+    "PROFILE_COLOR",
     "crease_edges",
     "edge_map",
     "enhance",
@@ -45,6 +47,11 @@ __all__ = [
 
 DEFAULT_DEPTH_JUMP = 1.0
 DEFAULT_CREASE_ANGLE = 30.0
+
+
+#: :func:`enhance` defaults (2003 §5): white inner edges, black profiles.
+INNER_COLOR = (1.0, 1.0, 1.0)
+PROFILE_COLOR = (0.0, 0.0, 0.0)
 
 
 def _check_params(depth_jump: float, crease_angle: float, width: float) -> None:
@@ -311,8 +318,8 @@ def edge_map(
 def enhance(
     shaded_rgb: np.ndarray,
     edge_map: np.ndarray,
-    inner_color: Sequence[float] = (1.0, 1.0, 1.0),
-    profile_color: Sequence[float] = (0.0, 0.0, 0.0),
+    inner_color: Sequence[float] = INNER_COLOR,
+    profile_color: Sequence[float] = PROFILE_COLOR,
 ) -> np.ndarray:
     """Composite an edge map over a shaded image (2003 §5.1, technical illustration).
 

@@ -29,6 +29,7 @@ from ..core.gbuffer import GBuffer
 from ..core.isosurface import isosurface
 from ..errors import InputError
 from ..filters import color_bands, contour_lines, lambert, profile_edges
+from ..readers.dicom import read_dicom_series
 from ._intervals import round_up
 from ._map import rgba
 
@@ -146,8 +147,6 @@ def ct_surface(
     if isinstance(source, pv.DataSet):
         volume = source
     elif isinstance(source, (str, os.PathLike, list, tuple)):
-        from ..readers.dicom import read_dicom_series
-
         volume = read_dicom_series(
             source, series_uid=series_uid, resample=resample, progress_bar=progress_bar
         )

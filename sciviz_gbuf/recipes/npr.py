@@ -7,7 +7,6 @@ captures the scene when given data instead of a G-buffer, and returns 8-bit RGB 
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Sequence
 
 import numpy as np
@@ -18,28 +17,15 @@ from ..core.camera import VIEWS
 from ..core.capture import capture
 from ..core.framing import named_view_camera
 from ..core.gbuffer import GBuffer
-from ..errors import InputError
-from ..styles import gooch, hatch, line_drawing, toon
+from ..datasets import load_nut
+from ..styles import STYLES as STYLE_REGISTRY
+from ..styles import check_style, styles_for, with_section_uv
 
 __all__ = ["MIRROR_CAMERA", "STYLES", "mirror_scene", "npr_image", "with_section_uv"]
 
-#: Style name -> one-line description.
-STYLES = {
-    "gooch": "technical illustration: warm-cool shading, white inner edges, black profiles",
-    "toon": "cartoon shading: a few flat shade levels and black profiles",
-    "hatch": "pen-and-ink hatching: strokes thickening with the shade, black profiles",
-    "lines": "line drawing: profiles and shade-modulated curved hatching (1990 Fig. 9)",
-}
-
-
-def with_section_uv(gb: GBuffer) -> GBuffer:
-    """The G-buffer with ``uv`` replaced by two world coordinates, for surfaces without a
-    parameterisation: curved hatching of them draws parallel sections (1990 §3.4), across the
-    two world axes least aligned with the line of sight."""
-    sight = np.abs(np.asarray(gb.camera.direction, dtype=np.float64))
-    a, b = sorted(np.argsort(sight)[:2])
-    uv = np.where(gb.mask[..., None], gb.world[..., [a, b]], np.float32(np.nan))
-    return dataclasses.replace(gb, uv=uv.astype(np.float32))
+#: The styles of :func:`npr_image` (``{name: description}``, from the styles registry;
+#: ``"lines"`` is still accepted for ``"drawing"``).
+STYLES = styles_for("npr")
 
 
 def npr_image(
@@ -61,12 +47,12 @@ def npr_image(
         A G-buffer is used as is; anything else is captured first (``view``, ``window_size``,
         ``supersample`` as in :func:`~sciviz_gbuf.capture`; a named view of datasets is framed
         tightly on their points).
-    style : {"gooch", "toon", "hatch", "lines"}, default: "gooch"
-        See :data:`STYLES`.
+    style : {"gooch", "toon", "hatch", "drawing"}, default: "gooch"
+        See :data:`STYLES`; ``"lines"`` is the old name of ``"drawing"``.
     combo : str, default: "shuv"
-        ``lines``: which 1990 Fig. 9 combination (:func:`~sciviz_gbuf.styles.line_drawing`);
+        ``drawing``: which 1990 Fig. 9 combination (:func:`~sciviz_gbuf.styles.line_drawing`);
         a surface without texture coordinates is hatched along sections of one world axis
-        instead (``shuv`` becomes ``shu``).
+        instead (``shuv`` becomes ``shu``, see :func:`~sciviz_gbuf.styles.drawing`).
     **style_options
         Passed to the style function (``light``, ``levels``, ``spacing``...).
 
@@ -74,8 +60,7 @@ def npr_image(
     -------
     (H, W, 3) uint8 RGB on white paper.
     """
-    if style not in STYLES:
-        raise InputError(f"style: expected one of {sorted(STYLES)}, got {style!r}")
+    style = check_style(style, "npr")
     if isinstance(source, GBuffer):
         gb = source
     else:
@@ -88,22 +73,9 @@ def npr_image(
             source, window_size=(w, h), camera=view, supersample=supersample,
             progress_bar=progress_bar,
         )  # fmt: skip
-    if style == "gooch":
-        rgb = gooch(gb, **style_options)
-    elif style == "toon":
-        rgb = toon(gb, **style_options)
-    elif style == "hatch":
-        rgb = hatch(gb, **style_options)
-    else:
-        if gb.uv is None:
-            # Sections along one world axis: two crossing families of sections make moire on
-            # curved parts; the surface parameterisation of u and v does not.
-            gb, combo = (
-                with_section_uv(gb),
-                {"shuv": "shu", "cv": "cu", "shv": "shu"}.get(combo, combo),
-            )
-        grey = line_drawing(gb, combo=combo, **style_options)
-        rgb = np.repeat(grey[..., None], 3, axis=2)
+    if style == "drawing":
+        style_options["combo"] = combo
+    rgb = STYLE_REGISTRY[style].draw(gb, **style_options)
     return to_uint8(rgb)
 
 
@@ -114,8 +86,6 @@ MIRROR_CAMERA = ((125.0, 80.0, 175.0), (10.0, 14.0, -20.0), (0.0, 1.0, 0.0))
 def mirror_scene() -> list[pv.DataSet]:
     """The 2003 Fig. 8 set-up on bundled data: an upright rectangular mirror (index 0, facing
     +z), PyVista's nut centred at the origin (axis along y) and a ball beside it."""
-    from ..datasets import load_nut
-
     nut = load_nut()
     nut = nut.translate([-c for c in nut.center])
     mirror = pv.Plane(center=(0.0, 22.0, -45.0), direction=(0, 0, 1), i_size=130, j_size=75)

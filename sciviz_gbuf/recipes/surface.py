@@ -24,6 +24,7 @@ from ..core.gbuffer import GBuffer
 from ..errors import InputError
 from ..filters import contour_lines, lambert, profile_edges
 from ..filters.reflection import isophotes, reflection_lines
+from ..readers.patches import PatchSet, parametric_mesh, read_patches
 from ._intervals import round_up
 from ._map import rgba
 
@@ -69,8 +70,6 @@ def seam_patches(continuity: str = "C1", *, bend: float = 0.5):
     -------
     PatchSet
     """
-    from ..readers.patches import PatchSet
-
     if continuity not in CONTINUITIES:
         raise InputError(f"continuity: expected one of {CONTINUITIES}, got {continuity!r}")
     za = np.array([0.0, 0.5, 0.8, 0.9])
@@ -94,8 +93,6 @@ def seam_patches(continuity: str = "C1", *, bend: float = 0.5):
 
 def _surface(source, resolution) -> pv.PolyData:
     from vtkmodules.vtkCommonComputationalGeometry import vtkParametricFunction
-
-    from ..readers.patches import PatchSet, parametric_mesh, read_patches
 
     if isinstance(source, (str, os.PathLike)):
         source = read_patches(source)

@@ -31,12 +31,24 @@ from .. import _validate
 from ..core.gbuffer import GBuffer, check_gbuffer
 from ..errors import InputError
 from ..filters import lambert, profile_edges
-from .illustration import LIGHT
+from .illustration import LIGHT, PAPER
+from .registry import register
 
-__all__ = ["SPACES", "hatch", "stroke_ink", "tone_coverage"]
+__all__ = [
+    "HATCH_ANGLES",
+    "HATCH_SPACING",
+    "SPACES",
+    "hatch",
+    "stroke_ink",
+    "tone_coverage",
+]
 
 #: Where the strokes live: fixed screen directions, or the surface's (u, v) parameterisation.
 SPACES = ("screen", "uv")
+#: :func:`hatch` defaults: stroke spacing in output pixels and the angles of the stroke
+#: families in order of priority (the first covers the lightest tones).
+HATCH_SPACING = 6.0
+HATCH_ANGLES = (45.0, -45.0, 0.0, 90.0)
 # More families than this do not darken anything further and only cost time.
 _MAX_FAMILIES = 16
 
@@ -162,14 +174,14 @@ def hatch(
     *,
     light: Sequence[float] = LIGHT,
     space: str = "screen",
-    spacing: float = 6.0,
-    angles: Sequence[float] = (45.0, -45.0, 0.0, 90.0),
+    spacing: float = HATCH_SPACING,
+    angles: Sequence[float] = HATCH_ANGLES,
     max_width: float | None = None,
     uv_scale: float | None = None,
     edges: bool = True,
     profile_width: float = 1.0,
     ink: Sequence[float] = (0.0, 0.0, 0.0),
-    paper: Sequence[float] = (1.0, 1.0, 1.0),
+    paper: Sequence[float] = PAPER,
 ) -> np.ndarray:
     """Edge-enhanced halftone hatching of a G-buffer (2003 §5, Fig. 8; Freudenberg et al. 2002).
 
@@ -309,3 +321,11 @@ def hatch(
             plane *= keep
         rgb[..., c] = plane
     return np.clip(rgb, 0.0, 1.0, out=rgb)
+
+
+register(
+    "hatch",
+    "pen-and-ink hatching: strokes thickening with the shade, black profiles",
+    fronts=("npr", "explore"),
+    draw=hatch,
+)

@@ -14,9 +14,13 @@ import numpy as np
 from ..core.gbuffer import GBuffer
 from ..errors import InputError
 from ..filters import crease_edges, edge_map, enhance, internal_edges, lambert, profile_edges
+from .registry import check_style, register, styles_for
 
 __all__ = [
     "LIGHT",
+    "PAPER",
+    "SHADE_AMBIENT",
+    "SHADE_HIGHLIGHT",
     "STYLES",
     "edges_to_map",
     "fig7_edge_map",
@@ -25,23 +29,22 @@ __all__ = [
     "signed_to_grey",
 ]
 
-#: Eye-space light from the upper left, as in hand-drawn illustrations.
+#: Eye-space light from the upper left, as in hand-drawn illustrations (every style's default).
 LIGHT = (-0.4, 0.5, 0.77)
-#: Styles of :func:`illustrate`, with a one-line description each.
-STYLES = {
-    "enhance": "shaded, white inner edges, black profiles (2003 edge map)",
-    "lines": "black profile and crease lines on white paper",
-    "fig7": "shaded, convex edges white, concave edges and profiles black (1990 Fig. 7)",
-    "edgemap": "the RGBA edge map itself: RGB inner-edge intensity, alpha profile (2003)",
-}
+#: White paper: the background of every style.
+PAPER = (1.0, 1.0, 1.0)
+#: :func:`shade_image`: ambient term and the highlight (the brightest shade, below white so
+#: that white edges stay visible on it).
+SHADE_AMBIENT = 0.2
+SHADE_HIGHLIGHT = 0.85
 
 
 def shade_image(
     gb: GBuffer,
     *,
     light: Sequence[float] = LIGHT,
-    ambient: float = 0.2,
-    highlight: float = 0.85,
+    ambient: float = SHADE_AMBIENT,
+    highlight: float = SHADE_HIGHLIGHT,
 ) -> np.ndarray:
     """Lambert shade of the G-buffer's normals on white paper, at the output size.
 
@@ -107,13 +110,13 @@ def illustrate(
     width: float = 1.0,
     light: Sequence[float] = LIGHT,
 ) -> np.ndarray:
-    """One illustration of a G-buffer in one of :data:`STYLES`.
+    """One illustration of a G-buffer in one of the ``"illustrate"`` styles of the registry.
 
     Parameters
     ----------
     gb : GBuffer
     style : {"enhance", "lines", "fig7", "edgemap"}, default: "enhance"
-        See :data:`STYLES`.
+        See :data:`STYLES` (``styles_for("illustrate")``).
     operator : {"diagonal", "c1"}, default: "diagonal"
         The 2003 edge-map operator (styles ``enhance`` and ``edgemap``; the other styles use
         the pair-wise profile and internal edges of :mod:`sciviz_gbuf.filters`).
@@ -127,8 +130,7 @@ def illustrate(
     -------
     (H, W, 3) float32 RGB in [0, 1]; ``edgemap``: (H, W, 4) RGBA.
     """
-    if style not in STYLES:
-        raise InputError(f"style: expected one of {sorted(STYLES)}, got {style!r}")
+    style = check_style(style, "illustrate")
     opts = {"crease_angle": crease_angle, "depth_jump": depth_jump, "width": width}
     if style in ("enhance", "edgemap"):
         emap = edge_map(gb, operator=operator, **opts)
@@ -141,3 +143,45 @@ def illustrate(
         )
         return np.repeat((1.0 - ink)[..., None], 3, axis=2).astype(np.float32)
     return enhance(shade_image(gb, light=light), fig7_edge_map(gb, **opts))
+
+
+def _illustration(style: str):
+    def draw(gb: GBuffer, **options) -> np.ndarray:
+        return illustrate(gb, style=style, **options)
+
+    draw.__name__ = draw.__qualname__ = f"illustrate_{style}"
+    return draw
+
+
+_EDGE_FRONTS = ("illustrate", "explore", "live")
+register(
+    "enhance",
+    "shaded, white inner edges, black profiles (2003 edge map)",
+    fronts=_EDGE_FRONTS,
+    draw=_illustration("enhance"),
+)
+register(
+    "lines",
+    "black profile and crease lines on white paper",
+    fronts=_EDGE_FRONTS,
+    draw=_illustration("lines"),
+)
+register(
+    "fig7",
+    "shaded, convex edges white, concave edges and profiles black (1990 Fig. 7)",
+    fronts=_EDGE_FRONTS,
+    draw=_illustration("fig7"),
+)
+register(
+    "edgemap",
+    "the RGBA edge map itself: RGB inner-edge intensity, alpha profile (2003)",
+    fronts=("illustrate",),
+    draw=_illustration("edgemap"),
+)
+register(
+    "profile",
+    "profiles (silhouettes, borders, occlusions) only, over the rendering",
+    fronts=("live",),
+)
+#: The styles of :func:`illustrate` (``{name: description}``, from the registry).
+STYLES = styles_for("illustrate")

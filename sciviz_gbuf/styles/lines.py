@@ -12,6 +12,7 @@ model of such a machine, so that the claim can be tested.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 
 import numpy as np
@@ -22,8 +23,18 @@ from ..core.gbuffer import GBuffer, check_gbuffer
 from ..errors import InputError
 from ..filters import hatching, lambert, profile_edges
 from .illustration import LIGHT
+from .registry import register
 
-__all__ = ["COMBOS", "TONE_FULL", "TONE_NONE", "line_drawing", "modulation", "photocopy"]
+__all__ = [
+    "COMBOS",
+    "TONE_FULL",
+    "TONE_NONE",
+    "drawing",
+    "line_drawing",
+    "modulation",
+    "photocopy",
+    "with_section_uv",
+]
 
 #: The images of 1990 Fig. 9 that :func:`line_drawing` makes, with what each one holds.
 COMBOS = {
@@ -224,3 +235,40 @@ def photocopy(
             out = out + rng.normal(0.0, nz, size=out.shape)
         out = np.round(np.clip(out, 0.0, 1.0) * 255.0) / 255.0
     return out.astype(np.float32)
+
+
+def with_section_uv(gb: GBuffer) -> GBuffer:
+    """The G-buffer with ``uv`` replaced by two world coordinates, for surfaces without a
+    parameterisation: curved hatching of them draws parallel sections (1990 §3.4), across the
+    two world axes least aligned with the line of sight."""
+    sight = np.abs(np.asarray(gb.camera.direction, dtype=np.float64))
+    a, b = sorted(np.argsort(sight)[:2])
+    uv = np.where(gb.mask[..., None], gb.world[..., [a, b]], np.float32(np.nan))
+    return dataclasses.replace(gb, uv=uv.astype(np.float32))
+
+
+def drawing(gb: GBuffer, *, combo: str = "shuv", **options) -> np.ndarray:
+    """:func:`line_drawing` as an RGB picture, for any surface: one without texture coordinates
+    is hatched along sections of world axes (:func:`with_section_uv`) and, since two crossing
+    families of sections make moire on curved parts, with one family only (``shuv`` becomes
+    ``shu``); the surface parameterisation of u and v does not.
+
+    Returns
+    -------
+    (H, W, 3) float32 grey RGB in [0, 1], 1 = paper.
+    """
+    gb = check_gbuffer(gb)
+    if gb.uv is None:
+        gb = with_section_uv(gb)
+        combo = {"shuv": "shu", "cv": "cu", "shv": "shu"}.get(combo, combo)
+    grey = line_drawing(gb, combo=combo, **options)
+    return np.repeat(grey[..., None], 3, axis=2)
+
+
+register(
+    "drawing",
+    "line drawing: profiles and shade-modulated curved hatching (1990 Fig. 9)",
+    fronts=("npr",),
+    draw=drawing,
+    aliases=("lines",),
+)

@@ -21,12 +21,44 @@ from .. import _validate
 from ..core.gbuffer import GBuffer, check_gbuffer
 from ..errors import InputError
 from ..filters import edge_map, enhance
-from .illustration import LIGHT
+from .illustration import LIGHT, PAPER
+from .registry import register
 
-__all__ = ["MAX_LEVELS", "gooch", "toon"]
+__all__ = [
+    "GOOCH_ALPHA",
+    "GOOCH_BASE",
+    "GOOCH_BETA",
+    "GOOCH_COOL",
+    "GOOCH_INNER_COLOR",
+    "GOOCH_PROFILE_COLOR",
+    "GOOCH_WARM",
+    "MAX_LEVELS",
+    "TOON_BASE",
+    "TOON_INNER_COLOR",
+    "TOON_LEVELS",
+    "TOON_PROFILE_COLOR",
+    "gooch",
+    "toon",
+]
 
 #: Largest shade texture :func:`toon` accepts (texels).
 MAX_LEVELS = 256
+
+
+#: :func:`gooch` defaults (Gooch et al. 1998): base colour, warm and cool tones and how much of
+#: the base each takes (``alpha`` cool, ``beta`` warm); white inner edges, black profiles.
+GOOCH_BASE = (0.75, 0.75, 0.75)
+GOOCH_WARM = (0.4, 0.4, 0.0)
+GOOCH_COOL = (0.0, 0.0, 0.4)
+GOOCH_ALPHA = 0.2
+GOOCH_BETA = 0.6
+GOOCH_INNER_COLOR = (1.0, 1.0, 1.0)
+GOOCH_PROFILE_COLOR = (0.0, 0.0, 0.0)
+#: :func:`toon` defaults (Lake et al. 2000): shade levels, base colour, black edges.
+TOON_LEVELS = 3
+TOON_BASE = (0.9, 0.55, 0.3)
+TOON_INNER_COLOR = (0.0, 0.0, 0.0)
+TOON_PROFILE_COLOR = (0.0, 0.0, 0.0)
 
 
 def _unit_light(light: object) -> np.ndarray:
@@ -125,19 +157,19 @@ def gooch(
     gb: GBuffer,
     *,
     light: Sequence[float] = LIGHT,
-    base: Sequence[float] = (0.75, 0.75, 0.75),
-    warm: Sequence[float] = (0.4, 0.4, 0.0),
-    cool: Sequence[float] = (0.0, 0.0, 0.4),
-    alpha: float = 0.2,
-    beta: float = 0.6,
+    base: Sequence[float] = GOOCH_BASE,
+    warm: Sequence[float] = GOOCH_WARM,
+    cool: Sequence[float] = GOOCH_COOL,
+    alpha: float = GOOCH_ALPHA,
+    beta: float = GOOCH_BETA,
     edges: bool = True,
     operator: str = "diagonal",
     crease_angle: float = 30.0,
     depth_jump: float = 1.0,
     width: float = 1.0,
-    inner_color: Sequence[float] = (1.0, 1.0, 1.0),
-    profile_color: Sequence[float] = (0.0, 0.0, 0.0),
-    background: Sequence[float] = (1.0, 1.0, 1.0),
+    inner_color: Sequence[float] = GOOCH_INNER_COLOR,
+    profile_color: Sequence[float] = GOOCH_PROFILE_COLOR,
+    background: Sequence[float] = PAPER,
 ) -> np.ndarray:
     """Cool-to-warm technical illustration (Gooch et al. 1998) with the 2003 edge map.
 
@@ -313,17 +345,17 @@ def toon(
     gb: GBuffer,
     *,
     light: Sequence[float] = LIGHT,
-    levels: int | Sequence[float] | Sequence[Sequence[float]] = 3,
-    base: Sequence[float] = (0.9, 0.55, 0.3),
+    levels: int | Sequence[float] | Sequence[Sequence[float]] = TOON_LEVELS,
+    base: Sequence[float] = TOON_BASE,
     smooth: float = 0.0,
     edges: bool = True,
     operator: str = "diagonal",
     crease_angle: float = 30.0,
     depth_jump: float = 1.0,
     width: float = 1.0,
-    inner_color: Sequence[float] | None = (0.0, 0.0, 0.0),
-    profile_color: Sequence[float] = (0.0, 0.0, 0.0),
-    background: Sequence[float] = (1.0, 1.0, 1.0),
+    inner_color: Sequence[float] | None = TOON_INNER_COLOR,
+    profile_color: Sequence[float] = TOON_PROFILE_COLOR,
+    background: Sequence[float] = PAPER,
 ) -> np.ndarray:
     """Cartoon shading (Lake et al. 2000) with the 2003 edge map (Nienhaus & Döllner 2003 §5).
 
@@ -394,3 +426,17 @@ def toon(
         inner_color=inner_c,
         profile_color=prof_c,
     )
+
+
+register(
+    "gooch",
+    "technical illustration: warm-cool shading, white inner edges, black profiles",
+    fronts=("npr", "explore"),
+    draw=gooch,
+)
+register(
+    "toon",
+    "cartoon shading: a few flat shade levels and black profiles",
+    fronts=("npr", "explore"),
+    draw=toon,
+)

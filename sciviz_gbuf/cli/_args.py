@@ -1,0 +1,75 @@
+"""Option types and options shared by the command modules (argparse ``type=`` callables raise
+``ArgumentTypeError`` with what was expected; file checks raise ``InputError``)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+from ..errors import InputError
+
+__all__ = ["add_progress", "number", "png_output", "positive_int", "show_progress", "size"]
+
+
+def size(text: str) -> tuple[int, int]:
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        w = h = 0
+    if w <= 0 or h <= 0:
+        raise argparse.ArgumentTypeError(
+            f"expected WIDTHxHEIGHT of positive integers such as 1024x768, got {text!r}"
+        )
+    return w, h
+
+
+def number(ok: Callable[[float], bool], expected: str) -> Callable[[str], float]:
+    """An argparse type: a float for which ``ok`` holds (NaN never does), else an error that
+    says what was ``expected``."""
+
+    def parse(text: str) -> float:
+        try:
+            v = float(text)
+        except ValueError:
+            v = float("nan")
+        if not (math.isfinite(v) and ok(v)):
+            raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}")
+        return v
+
+    return parse
+
+
+def positive_int(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        v = 0
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    return v
+
+
+def show_progress(args: argparse.Namespace) -> bool:
+    """``--progress``/``--no-progress``, else on only when stderr is a terminal."""
+    return sys.stderr.isatty() if args.progress is None else bool(args.progress)
+
+
+def png_output(text: str) -> Path:
+    out = Path(text)
+    if out.suffix.lower() != ".png":
+        raise InputError(f"--output: expected a file name ending in .png, got {text!r}")
+    if not out.parent.is_dir():
+        raise InputError(f"--output: no such directory {str(out.parent)!r}")
+    return out
+
+
+def add_progress(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--progress",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="show a progress bar (default: only when stderr is a terminal)",
+    )

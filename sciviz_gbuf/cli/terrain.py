@@ -1,0 +1,445 @@
+"""``sciviz-gbuf topo | birdseye``: plan-view topographic maps (in memory or out of core) and
+bird's-eye maps of DEMs."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+from pathlib import Path
+
+from .._progress import progress
+from ..compose import write_geotiff, write_png
+from ..datasets import load_jacksboro_dem
+from ..errors import InputError
+from ..readers import read_dem
+from ..recipes.birdseye import birdseye_gbuffer, birdseye_panels, sumi_e
+from ..recipes.terrain import topographic_map
+from ..writers.cog import local_client, write_cog
+from ._args import add_progress, number, png_output, positive_int, show_progress, size
+
+__all__ = ["add_birdseye", "add_topo"]
+
+
+def _contours(text: str) -> tuple[float, float] | str | None:
+    """``MINOR,MAJOR``, ``MAJOR`` alone (minors at a fifth), ``none`` or ``auto``."""
+    t = text.strip().lower()
+    if t in ("none", "auto"):
+        return t
+    try:
+        vals = [float(v) for v in t.split(",")]
+    except ValueError:
+        vals = []
+    if not (1 <= len(vals) <= 2 and all(math.isfinite(v) and v > 0 for v in vals)):
+        raise argparse.ArgumentTypeError(
+            f"expected MINOR,MAJOR intervals such as 20,100 (or one major interval, 'auto', "
+            f"'none'), got {text!r}"
+        )
+    if len(vals) == 1:
+        return vals[0] / 5.0, vals[0]
+    if vals[1] < vals[0]:
+        raise argparse.ArgumentTypeError(f"expected MINOR <= MAJOR, got {text!r}")
+    return vals[0], vals[1]
+
+
+def _bands(text: str):
+    """``auto`` (one per major interval), ``none``, ``continuous``, an interval or ``L1,L2,...``."""
+    t = text.strip().lower()
+    if t in ("auto", "none", "continuous"):
+        return {"auto": True, "none": False}.get(t, t)
+    try:
+        vals = [float(v) for v in t.split(",")]
+    except ValueError:
+        vals = []
+    if not vals or not all(math.isfinite(v) for v in vals) or (len(vals) == 1 and vals[0] <= 0):
+        raise argparse.ArgumentTypeError(
+            f"expected auto, none, continuous, an interval > 0 or levels L1,L2,..., got {text!r}"
+        )
+    return vals[0] if len(vals) == 1 else vals
+
+
+def _read_terrain(source: str | None):
+    return load_jacksboro_dem() if source is None else read_dem(source)
+
+
+def _contour_options(spec) -> dict:
+    if spec == "none":
+        return {"contours": False}
+    if spec == "auto":
+        return {}
+    return {"interval": spec[0], "major_interval": spec[1]}
+
+
+def _chunks_arg(text: str) -> tuple[int, int]:
+    """``--chunks``: ``N`` (square) or ``ROWS,COLS`` positive integers."""
+    try:
+        vals = [int(v) for v in text.split(",")]
+    except ValueError:
+        vals = []
+    if len(vals) not in (1, 2) or min(vals) < 1:
+        raise argparse.ArgumentTypeError(
+            f"expected a chunk size N or ROWS,COLS of positive integers such as 2048, got {text!r}"
+        )
+    return (vals[0], vals[0]) if len(vals) == 1 else (vals[0], vals[1])
+
+
+def _topo_options(args: argparse.Namespace, show: bool) -> dict:
+    return {
+        **_contour_options(args.contours),
+        "width": args.width,
+        "major_width": args.major_width,
+        "bands": args.bands,
+        "cmap": args.cmap,
+        "sea_level": args.sea_level,
+        "relief": not args.no_relief,
+        "azimuth": args.azimuth,
+        "altitude": args.altitude,
+        "z_factor": args.z_factor,
+        "variant": args.variant,
+        "shadows": args.shadows,
+        "sky_view": args.sky_view,
+        "progress_bar": show,
+    }
+
+
+def _topo_paths(args: argparse.Namespace) -> tuple[Path, bool]:
+    """Checked ``--output`` (and ``--geotiff``, ``--overview``, cluster options); True for a
+    .tif output."""
+    out = Path(args.output)
+    suffix = out.suffix.lower()
+    lazy = args.chunks is not None or args.dask is not None
+    if suffix not in (".png", ".tif", ".tiff"):
+        raise InputError(
+            f"--output: expected a file name ending in .png or .tif, got {args.output!r}"
+        )
+    if not out.parent.is_dir():
+        raise InputError(f"--output: no such directory {str(out.parent)!r}")
+    tif = suffix != ".png"
+    if lazy and not tif:
+        raise InputError(
+            f"--output: out of core (--chunks/--dask) the map is written as a Cloud-Optimised "
+            f"GeoTIFF: expected a .tif file, got {args.output!r} (add --overview FILE.png for "
+            "a PNG preview)"
+        )
+    if args.overview is not None and not tif:
+        raise InputError("--overview: a PNG preview comes from a .tif output: use -o FILE.tif")
+    if args.geotiff is not None:
+        if tif:
+            raise InputError("--geotiff: the output is already a GeoTIFF: use -o FILE.tif alone")
+        g = Path(args.geotiff)
+        if g.suffix.lower() not in (".tif", ".tiff") or not g.parent.is_dir():
+            raise InputError(
+                f"--geotiff: expected a .tif/.tiff file in an existing folder, got {args.geotiff!r}"
+            )
+    cluster_options = args.workers is not None or args.memory_limit is not None
+    if cluster_options and args.dask != "local":
+        raise InputError(
+            "--workers/--memory-limit: only for a new local cluster (--dask without an address)"
+        )
+    return out, tif
+
+
+def _cmd_topo(args: argparse.Namespace) -> int:
+    out, tif = _topo_paths(args)
+    source = None if not args.dem else args.dem[0] if len(args.dem) == 1 else list(args.dem)
+    t0 = time.perf_counter()
+    show = show_progress(args)
+    if args.chunks is not None or args.dask is not None:
+        return _topo_out_of_core(args, source, out, show, t0)
+    with progress(show, 2 + (args.geotiff is not None), "topo") as bar:
+        dem = _read_terrain(source)
+        bar.step("map")
+        rgba = topographic_map(dem, **_topo_options(args, show))
+        bar.step("write")
+        if tif:
+            write_cog(
+                rgba, out, dem=dem, overview_png=args.overview, overview_size=args.overview_size
+            )
+        else:
+            write_png(out, rgba)
+        if args.geotiff is not None:
+            write_geotiff(args.geotiff, rgba, dem=dem)
+            bar.step("geotiff")
+    h, w = dem.shape
+    extra = "".join(f" and {f}" for f in (args.geotiff, args.overview) if f)
+    print(f"wrote {out}{extra} ({w}x{h}) in {time.perf_counter() - t0:.1f} s")
+    return 0
+
+
+def _topo_out_of_core(args: argparse.Namespace, source, out: Path, show: bool, t0: float) -> int:
+    """``--chunks``/``--dask``: lazy DEM -> lazy map -> COG written block by block."""
+    if source is None:
+        raise InputError("dem: out of core (--chunks/--dask) needs DEM file(s) to read")
+    # Read (metadata only) before a cluster starts: a bad file fails fast.
+    dem = read_dem(source, chunks=args.chunks or 2048)
+    client = None
+    if args.dask == "local":
+        client = local_client(args.workers or 2, memory_limit=args.memory_limit or "3GB")
+    elif args.dask is not None:
+        from distributed import Client
+
+        try:
+            client = Client(args.dask, timeout="10s")
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise InputError(
+                f"--dask: cannot connect to a dask scheduler at {args.dask!r} ({exc})"
+            ) from exc
+    try:
+        # While open, the Client is dask's default scheduler: the map's whole-grid reductions
+        # (colour range, contour interval) run on the cluster too.
+        rgba = topographic_map(dem, **_topo_options(args, show))
+        write_cog(
+            rgba,
+            out,
+            dem=dem,
+            overview_png=args.overview,
+            overview_size=args.overview_size,
+            client=client,
+            progress_bar=show,
+        )
+    finally:
+        if client is not None:
+            cluster = client.cluster if args.dask == "local" else None
+            client.close()
+            if cluster is not None:
+                cluster.close()
+    h, w = dem.shape
+    where = "local threads" if client is None else f"dask cluster {args.dask}"
+    extra = f" and {args.overview}" if args.overview else ""
+    print(
+        f"wrote {out}{extra} ({w}x{h}, chunks {dem.heights.chunksize}, {where}) "
+        f"in {time.perf_counter() - t0:.1f} s"
+    )
+    return 0
+
+
+def _cmd_birdseye(args: argparse.Namespace) -> int:
+    out = png_output(args.output)
+    t0 = time.perf_counter()
+    show = show_progress(args)
+    dem = _read_terrain(args.dem)
+    gb = birdseye_gbuffer(
+        dem,
+        view_azimuth=args.view_azimuth,
+        elevation_angle=args.elevation_angle,
+        window_size=args.size,
+        vert_exag=args.vert_exag,
+        supersample=args.supersample,
+        progress_bar=show,
+    )
+    if args.save_gbuffer:
+        gb.save(args.save_gbuffer)
+    if args.style == "sumi-e":
+        opts = {} if args.contours in ("auto", "none") else {"interval": args.contours[0]}
+        image = sumi_e(gb, **opts)
+    else:
+        panels = birdseye_panels(
+            gb,
+            **_contour_options(args.contours),
+            bands=args.bands,
+            cmap=args.cmap,
+            sea_level=args.sea_level,
+            azimuth=args.azimuth,
+            altitude=args.altitude,
+        )
+        image = panels[args.style]
+    write_png(out, image)
+    w, h = args.size
+    print(f"wrote {out} ({w}x{h}, {args.style}) in {time.perf_counter() - t0:.1f} s")
+    return 0
+
+
+def _add_map_style(p: argparse.ArgumentParser, *, tiles: bool = False) -> None:
+    """Options shared by the plan-view and bird's-eye maps; ``tiles``: several DEM files (one
+    mosaic) and a .png or .tif output."""
+    p.add_argument(
+        "dem",
+        nargs="*" if tiles else "?",
+        help="DEM file: GeoTIFF, .asc, .hgt, USGS .dem, .npy/.npz (default: the bundled "
+        "Jacksboro fault DEM from Matplotlib's sample data)"
+        + (
+            "; several files (e.g. SRTM tiles of one CRS and resolution) make one mosaic"
+            if tiles
+            else ""
+        ),
+    )
+    p.add_argument(
+        "-o",
+        "--output",
+        required=True,
+        help="output image (.png, or .tif for a Cloud-Optimised GeoTIFF)"
+        if tiles
+        else "output image (.png)",
+    )
+    p.add_argument(
+        "--contours",
+        type=_contours,
+        default="auto",
+        metavar="MINOR,MAJOR",
+        help="contour intervals in height units, e.g. 20,100; one number is the major interval "
+        "(minors at a fifth); 'none' draws none (default: about 8 round majors)",
+    )
+    p.add_argument(
+        "--bands",
+        type=_bands,
+        default=True,
+        metavar="SPEC",
+        help="colour bands: auto (one per major interval), none, continuous, an interval, or "
+        "band edges L1,L2,...",
+    )
+    p.add_argument("--cmap", default=None, help="matplotlib colour map of the bands")
+    p.add_argument(
+        "--sea-level",
+        type=number(lambda v: True, "a height"),
+        default=None,
+        help="topo-bathymetry: heights below it get sea colours",
+    )
+    p.add_argument(
+        "--azimuth",
+        type=number(lambda v: True, "degrees"),
+        default=315.0,
+        help="sun direction, degrees clockwise from north (default 315)",
+    )
+    p.add_argument(
+        "--altitude",
+        type=number(lambda v: 0 < v <= 90, "degrees in (0, 90]"),
+        default=45.0,
+        help="sun altitude above the horizon in degrees (default 45)",
+    )
+
+
+def add_topo(sub) -> None:
+    """Add the ``topo`` command to the sub-parsers ``sub``."""
+    p = sub.add_parser(
+        "topo",
+        help="plan-view topographic map of a DEM: bands, relief, contours (PNG, GeoTIFF)",
+        description="Colour bands, GDAL-compatible relief and major/minor contour lines of a "
+        "DEM on its own grid (Saito & Takahashi 1990, Fig. 11). Nodata is transparent. "
+        "With --chunks or --dask the DEM is read, mapped and written chunk by chunk (out of "
+        "core, any size): the output must be a .tif (a Cloud-Optimised GeoTIFF).",
+    )
+    _add_map_style(p, tiles=True)
+    p.add_argument(
+        "--geotiff",
+        default=None,
+        metavar="FILE.tif",
+        help="also write an RGBA GeoTIFF with the DEM's CRS and transform",
+    )
+    p.add_argument(
+        "--width",
+        type=number(lambda v: v > 0, "a line width in pixels > 0"),
+        default=1.0,
+        help="minor contour width in pixels (default 1)",
+    )
+    p.add_argument(
+        "--major-width",
+        type=number(lambda v: v > 0, "a line width in pixels > 0"),
+        default=2.0,
+        help="major contour width in pixels (default 2)",
+    )
+    p.add_argument(
+        "--z-factor",
+        type=number(lambda v: v > 0, "a number > 0"),
+        default=1.0,
+        help="vertical exaggeration of the relief (GDAL's -z)",
+    )
+    p.add_argument(
+        "--variant",
+        default="regular",
+        choices=["regular", "combined", "multidirectional", "igor"],
+        help="hillshade variant (GDAL's)",
+    )
+    p.add_argument("--no-relief", action="store_true", help="no relief shading")
+    p.add_argument("--shadows", action="store_true", help="darken cast shadows")
+    p.add_argument(
+        "--sky-view", action="store_true", help="darken cells that see less sky (slow: ~1 MPix/s)"
+    )
+    p.add_argument(
+        "--chunks",
+        type=_chunks_arg,
+        default=None,
+        metavar="N|ROWS,COLS",
+        help="out of core: read, map and write the DEM in chunks of this many cells "
+        "(e.g. 2048; default 2048 with --dask); needs a .tif output",
+    )
+    p.add_argument(
+        "--dask",
+        nargs="?",
+        const="local",
+        default=None,
+        metavar="ADDRESS",
+        help="out of core on dask.distributed: a new local cluster (no ADDRESS), or the "
+        "scheduler at ADDRESS (tcp://host:8786)",
+    )
+    p.add_argument(
+        "--workers",
+        type=positive_int,
+        default=None,
+        help="worker processes of the local --dask cluster (default 2; each gets "
+        "NUMBA_NUM_THREADS = cores // workers)",
+    )
+    p.add_argument(
+        "--memory-limit",
+        default=None,
+        metavar="SIZE",
+        help="memory limit per worker of the local --dask cluster (default 3GB)",
+    )
+    p.add_argument(
+        "--overview",
+        default=None,
+        metavar="FILE.png",
+        help="with a .tif output: also a PNG preview read from its overviews",
+    )
+    p.add_argument(
+        "--overview-size",
+        type=positive_int,
+        default=2048,
+        metavar="PX",
+        help="long side of the --overview PNG in pixels (default 2048)",
+    )
+    add_progress(p)
+    p.set_defaults(func=_cmd_topo)
+
+
+def add_birdseye(sub) -> None:
+    """Add the ``birdseye`` command to the sub-parsers ``sub``."""
+    p = sub.add_parser(
+        "birdseye",
+        help="bird's-eye map of a DEM: profiles, contours, relief, bands (or a sumi-e)",
+        description="Render the DEM surface once, then enhance its G-buffers: contour lines of "
+        "the height, relief from the normals, profile lines from sz and colour bands "
+        "(Saito & Takahashi 1990, Figs. 12 and 13).",
+    )
+    _add_map_style(p)
+    p.add_argument(
+        "--elevation-angle",
+        type=number(lambda v: 0 < v < 90, "degrees in (0, 90)"),
+        default=35.0,
+        help="angle of the line of sight above the horizon (default 35)",
+    )
+    p.add_argument(
+        "--view-azimuth",
+        type=number(lambda v: True, "degrees"),
+        default=135.0,
+        help="compass direction of the eye from the terrain (default 135, south-east)",
+    )
+    p.add_argument(
+        "--vert-exag",
+        type=number(lambda v: v > 0, "a number > 0"),
+        default=1.0,
+        help="vertical exaggeration of the surface (default 1)",
+    )
+    p.add_argument("--size", type=size, default=(1024, 768), help="image size WxH")
+    p.add_argument("--supersample", type=positive_int, default=2, help="render at k times the size")
+    p.add_argument(
+        "--style",
+        default="mx4",
+        choices=["mx4", "mx2", "cn", "pr", "sh", "sumi-e"],
+        help="mx4: profiles + contours + relief + bands (default); mx2: profiles + relief; "
+        "cn contours; pr profiles; sh relief; sumi-e an ink painting",
+    )
+    p.add_argument(
+        "--save-gbuffer", default=None, metavar="FILE.npz", help="also save the G-buffers"
+    )
+    add_progress(p)
+    p.set_defaults(func=_cmd_birdseye)
