@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import re
-from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
+from tests.helpers.paths import PROJECT_ROOT
+
+ROOT = PROJECT_ROOT
 
 
 def test_readme_python_example_runs(tmp_path, monkeypatch):

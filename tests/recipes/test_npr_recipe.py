@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import pyvista as pv
-from conftest import SHARED_DATA
 from PIL import Image
 
 import sciviz_gbuf as sg
@@ -13,6 +12,7 @@ from sciviz_gbuf import styles
 from sciviz_gbuf.cli import main
 from sciviz_gbuf.errors import InputError
 from sciviz_gbuf.recipes.npr import STYLES, npr_image, with_section_uv
+from tests.helpers.paths import SHARED_DATA
 
 STL = SHARED_DATA / "meshes" / "vtkdata_42400-IDGH.stl"
 

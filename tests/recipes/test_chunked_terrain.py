@@ -6,7 +6,6 @@ from __future__ import annotations
 import dataclasses
 import sys
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -30,10 +29,11 @@ from sciviz_gbuf.filters import (
 from sciviz_gbuf.readers import read_dem
 from sciviz_gbuf.recipes import terrain_chunked
 from sciviz_gbuf.recipes.terrain import topographic_map
+from tests.helpers.paths import SHARED_DATA
 
 da = pytest.importorskip("dask.array")
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "dem"
+DATA = SHARED_DATA / "dem"
 ODD = (7, 13)  # deliberately odd chunks: many chunk borders in both directions
 
 

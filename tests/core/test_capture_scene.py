@@ -5,12 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import pyvista as pv
-from conftest import interior, rays_by_hand
 from vtkmodules.vtkCommonCore import mutable
 from vtkmodules.vtkCommonDataModel import vtkCellLocator
 
 import sciviz_gbuf as sg
 from sciviz_gbuf.core import _render
+from tests.helpers.geometry import interior, rays_by_hand
 
 
 def _two_objects():

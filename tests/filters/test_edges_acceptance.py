@@ -1,8 +1,8 @@
 """Image-space edges against an object-space ground truth (issue 3 acceptance).
 
-The truth (tests/edge_truth.py) takes silhouette, border and crease edges from the mesh itself
-and keeps the visible parts by ray casting against the triangles: it shares nothing with the
-image-space filters. Profile + crease ink must match it with precision and recall >= 0.9 at a
+The truth (tests/helpers/edge_truth.py) takes silhouette, border and crease edges from the mesh
+itself and keeps the visible parts by ray casting against the triangles: it shares nothing with
+the image-space filters. Profile + crease ink must match it with precision and recall >= 0.9 at a
 tolerance of 1.5 px, on the machine nut, the CAD part of ../shared/data and PyVista's airplane
 (open surfaces: border edges), at 512^2 and 1024^2 from several views.
 """
@@ -12,12 +12,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import pyvista as pv
-from edge_truth import precision_recall, visible_edge_truth
 from pyvista import examples
 
 import sciviz_gbuf as sg
 from sciviz_gbuf.datasets import load_nut
 from sciviz_gbuf.filters import crease_edges, profile_edges
+from tests.helpers.edge_truth import precision_recall, visible_edge_truth
 
 VIEWS = [(35.0, 30.0), (-120.0, 55.0), (200.0, -25.0)]  # (azimuth, elevation) in degrees
 

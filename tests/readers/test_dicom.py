@@ -20,14 +20,6 @@ import numpy as np
 import pydicom
 import pytest
 import pyvista as pv
-from dicom_factory import (
-    AXIAL,
-    make_slice,
-    positions_along,
-    random_raws,
-    rotation_iop,
-    write_series,
-)
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from pydicom.uid import RLELossless, generate_uid
@@ -37,8 +29,17 @@ from sciviz_gbuf.errors import InputError
 from sciviz_gbuf.readers import dicom as dicom_mod
 from sciviz_gbuf.readers import dicom_report, read_dicom_series
 from sciviz_gbuf.readers.dicom import DicomDecoderError, DicomSeriesError
+from tests.helpers.dicom_factory import (
+    AXIAL,
+    make_slice,
+    positions_along,
+    random_raws,
+    rotation_iop,
+    write_series,
+)
+from tests.helpers.paths import SHARED_DATA
 
-CT_DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "ct"
+CT_DATA = SHARED_DATA / "ct"
 PHILIPS = CT_DATA / "dcm_qa_ct_Philips_phantom_5mm"
 TILT = CT_DATA / "dcm_qa_ct_Philips_phantom_tilt-18.5"
 needs_philips = pytest.mark.skipif(not PHILIPS.is_dir(), reason="Philips 5 mm series absent")

@@ -1,8 +1,8 @@
 """Mirrored, edge-enhanced scenes (Nienhaus & Döllner 2003 §5, Fig. 8).
 
 The reflected G-buffer is checked against hand-built geometry: main-camera pixel rays (from
-``conftest.rays_by_hand``, which shares no code with the package), reflected at the mirror
-plane and intersected analytically with a sphere.
+``tests.helpers.geometry.rays_by_hand``, which shares no code with the package), reflected at
+the mirror plane and intersected analytically with a sphere.
 """
 
 from __future__ import annotations
@@ -10,7 +10,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import pyvista as pv
-from conftest import angle_deg, interior, rays_by_hand
 from scipy import ndimage
 from vtkmodules.vtkRenderingCore import vtkCamera
 
@@ -18,6 +17,7 @@ from sciviz_gbuf.core import capture
 from sciviz_gbuf.errors import InputError
 from sciviz_gbuf.filters import profile_edges
 from sciviz_gbuf.styles.mirror import default_style, mirror_enhance, mirror_gbuffers
+from tests.helpers.geometry import angle_deg, interior, rays_by_hand
 
 # A floor mirror (z = 0, front +z), a sphere off to the right above it, a cube entirely below
 # it (behind the mirror) and a post that goes through it.

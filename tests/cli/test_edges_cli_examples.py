@@ -7,7 +7,6 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 import pyvista as pv
-from conftest import camera_basis
 
 import sciviz_gbuf as sg
 from sciviz_gbuf import InputError
@@ -27,6 +26,7 @@ from sciviz_gbuf.recipes import (
     signed_to_grey,
 )
 from sciviz_gbuf.recipes.saito1990 import sz_with_background
+from tests.helpers.geometry import camera_basis
 
 SIZE = (160, 120)
 

@@ -9,7 +9,6 @@ import shutil
 import numpy as np
 import pytest
 import pyvista as pv
-from conftest import SHARED_DATA
 from scipy.spatial.transform import Rotation
 
 import sciviz_gbuf as sg
@@ -24,6 +23,7 @@ from sciviz_gbuf.recipes.medical import (
     ct_panels,
     view_camera,
 )
+from tests.helpers.paths import SHARED_DATA
 
 PHILIPS = SHARED_DATA / "ct" / "dcm_qa_ct_Philips_phantom_5mm"
 CENTRE = np.array([3.0, -2.0, 40.0])

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import pyvista as pv
-from conftest import angle_deg, interior, rays_by_hand, to_eye
 
 import sciviz_gbuf as sg
+from tests.helpers.geometry import angle_deg, interior, rays_by_hand, to_eye
 
 RADIUS = 2.0
 CENTER = np.array([0.3, -0.2, 0.5])

@@ -9,11 +9,12 @@ from pathlib import Path
 import nbformat
 import numpy as np
 import pytest
-from conftest import SHARED_DATA
 from nbclient import NotebookClient
 from PIL import Image
 
-NOTEBOOK = Path(__file__).resolve().parents[1] / "examples" / "medical_enhancement.ipynb"
+from tests.helpers.paths import PROJECT_ROOT, SHARED_DATA
+
+NOTEBOOK = PROJECT_ROOT / "examples" / "medical_enhancement.ipynb"
 PHILIPS = SHARED_DATA / "ct" / "dcm_qa_ct_Philips_phantom_5mm"
 
 

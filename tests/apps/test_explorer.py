@@ -26,8 +26,9 @@ from sciviz_gbuf.apps.explorer import (
 from sciviz_gbuf.cli import build_parser
 from sciviz_gbuf.datasets import load_nut
 from sciviz_gbuf.errors import InputError
+from tests.helpers.paths import PROJECT_ROOT
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = PROJECT_ROOT
 
 
 @pytest.fixture(scope="module")
@@ -315,7 +316,7 @@ def test_browser_slider_updates_the_image_within_200_ms(explorer_server, capsys)
 
 
 def test_dicom_folder_is_explored_as_its_bone_surface(tmp_path):
-    from dicom_factory import write_series
+    from tests.helpers.dicom_factory import write_series
 
     # A bone ball (1000 HU) in air: raw = HU + 1024 with the factory's intercept.
     n = 24

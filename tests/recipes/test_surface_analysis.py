@@ -12,7 +12,6 @@ import dataclasses
 import numpy as np
 import pytest
 import pyvista as pv
-from conftest import SHARED_DATA, rays_by_hand
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -33,6 +32,8 @@ from sciviz_gbuf.recipes.surface import (
     surface_gbuffer,
     surface_layers,
 )
+from tests.helpers.geometry import rays_by_hand
+from tests.helpers.paths import SHARED_DATA
 
 SPHERE_BPT = SHARED_DATA / "patches" / "sphere.bpt"
 TEAPOT_BPT = SHARED_DATA / "patches" / "teapot.bpt"

@@ -1,4 +1,4 @@
-"""The object-space edge ground truth (tests/edge_truth.py) against analytic expectations."""
+"""The object-space edge ground truth (tests/helpers/edge_truth.py) against analytic results."""
 
 from __future__ import annotations
 
@@ -7,18 +7,18 @@ import itertools
 import numpy as np
 import pytest
 import pyvista as pv
-from edge_truth import (
+from vtkmodules.vtkFiltersCore import vtkFeatureEdges
+from vtkmodules.vtkRenderingCore import vtkCamera
+
+import sciviz_gbuf as sg
+from sciviz_gbuf.core.camera import CameraInfo
+from tests.helpers.edge_truth import (
     classify_edges,
     mesh_triangles,
     precision_recall,
     scene_triangles,
     visible_edge_truth,
 )
-from vtkmodules.vtkFiltersCore import vtkFeatureEdges
-from vtkmodules.vtkRenderingCore import vtkCamera
-
-import sciviz_gbuf as sg
-from sciviz_gbuf.core.camera import CameraInfo
 
 SIZE = (200, 200)
 

@@ -4,7 +4,6 @@ re-runs only the map layer it changes (contour ink, relief shade or band colours
 from __future__ import annotations
 
 import dataclasses
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,8 +13,9 @@ from sciviz_gbuf.datasets import load_jacksboro_dem, load_nut
 from sciviz_gbuf.errors import InputError
 from sciviz_gbuf.readers import read_dem
 from sciviz_gbuf.recipes.terrain import topographic_map
+from tests.helpers.paths import SHARED_DATA
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "dem"
+DATA = SHARED_DATA / "dem"
 HUGO = DATA / "hugo_site.asc"
 
 

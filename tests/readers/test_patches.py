@@ -13,13 +13,13 @@ import re
 import numpy as np
 import pytest
 import pyvista as pv
-from conftest import SHARED_DATA
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from sciviz_gbuf.errors import InputError
 from sciviz_gbuf.readers import PatchSet, read_patches
 from sciviz_gbuf.readers.patches import parametric_mesh
+from tests.helpers.paths import SHARED_DATA
 
 PATCHES = SHARED_DATA / "patches"
 SPHERE = PATCHES / "sphere.bpt"
