@@ -54,7 +54,7 @@ from ..recipes import (
     write_panels,
 )
 from ..recipes.npr import MIRROR_CAMERA, mirror_scene
-from ..styles.illustration import shade_image
+from ..styles.illustration import LIGHT, shade_image
 
 __all__ = ["run_demo", "terrain_birdseye_camera"]
 
@@ -73,8 +73,6 @@ CAPTIONS = {
 # Largest size of the (square) contour figures, in pixels: 800 x 20 m pixels of the DEM still
 # fit in it around the Fig. 11 map's centre.
 CONTOUR_SIZE = 800
-# Upper-left light in eye space, as in hand drawn illustrations.
-_LIGHT = (-0.4, 0.5, 0.77)
 
 
 @dataclass
@@ -121,7 +119,7 @@ def _scenes(aspect: float) -> list[_Scene]:
 def _shade(g: GBuffer, scene: _Scene) -> np.ndarray:
     """Headlight-free shade: an upper-left eye-space light, or the scene's world-space sun."""
     if scene.sun is None:
-        return lambert(g.normal, light=_LIGHT, ambient=0.15)
+        return lambert(g.normal, light=LIGHT, ambient=0.15)
     az, alt = np.radians(scene.sun)
     # GDAL's convention: azimuth clockwise from north (+y), altitude above the horizon
     sun = (np.sin(az) * np.cos(alt), np.cos(az) * np.cos(alt), np.sin(alt))

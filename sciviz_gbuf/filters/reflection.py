@@ -28,7 +28,7 @@ from .contours import contour_lines
 __all__ = ["highlight_lines", "isophotes", "reflection_angle", "reflection_lines"]
 
 MODES = ("reflection", "highlight")
-STYLES = ("lines", "stripes")
+PATTERNS = ("lines", "stripes")
 
 
 def _unit(vector: Sequence[float], name: str) -> np.ndarray:
@@ -123,8 +123,8 @@ def _check_pattern(count: float, width: float, style: str, duty: float) -> None:
         raise InputError(f"stripes: expected a number of lines >= 1 per turn, got {count!r}")
     if not (np.isfinite(width) and width > 0):
         raise InputError(f"width: expected a line width > 0 (output pixels), got {width!r}")
-    if style not in STYLES:
-        raise InputError(f"style: expected one of {STYLES}, got {style!r}")
+    if style not in PATTERNS:
+        raise InputError(f"style: expected one of {PATTERNS}, got {style!r}")
     if not 0.0 < duty < 1.0:
         raise InputError(f"duty: expected a fraction in (0, 1), got {duty!r}")
 

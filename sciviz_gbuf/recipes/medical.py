@@ -30,6 +30,7 @@ from ..core.isosurface import isosurface
 from ..errors import InputError
 from ..filters import color_bands, contour_lines, lambert, profile_edges
 from ..readers.dicom import read_dicom_series
+from ..styles import LIGHT
 from ._intervals import round_up
 from ._map import rgba
 
@@ -59,8 +60,6 @@ DEPTH_BANDS = LinearSegmentedColormap.from_list(
 CT_CONTOUR_COLOR = (0.22, 0.11, 0.04)
 #: Colour of bone in the conventional shaded image.
 BONE = (0.93, 0.87, 0.76)
-#: Eye-space light from the upper left, towards the viewer.
-LIGHT = (-0.4, 0.5, 0.77)
 #: Anatomical views: direction from the patient towards the eye, and the view-up, in LPS.
 VIEWS: dict[str, tuple[tuple[float, float, float], tuple[float, float, float]]] = {
     "anterior": ((0.0, -1.0, 0.0), (0.0, 0.0, 1.0)),

@@ -25,6 +25,7 @@ from ..errors import InputError
 from ..filters import contour_lines, lambert, profile_edges
 from ..filters.reflection import isophotes, reflection_lines
 from ..readers.patches import PatchSet, parametric_mesh, read_patches
+from ..styles import LIGHT
 from ._intervals import round_up
 from ._map import rgba
 
@@ -47,8 +48,6 @@ _CURVATURE_ARRAYS = {
     "k1": "k1",
     "k2": "k2",
 }
-#: Eye-space light from the upper left.
-LIGHT = (-0.4, 0.5, 0.77)
 #: Ink colour of the analysis lines.
 LINE_COLOR = (0.05, 0.05, 0.25)
 CONTINUITIES = ("C2", "C1", "G0")
