@@ -35,28 +35,10 @@ VTK algorithm is updated instead, call :func:`raise_pipeline_errors` on it.
 
 ``execution_count`` counts ``RequestData`` calls (for checking laziness).
 
-The classes (:data:`ALGORITHMS` maps the function names to them):
-
-=============================  ======================================  =====================
-class                          wraps                                   default input array
-=============================  ======================================  =====================
-``vtkGBufferCapture``          :func:`sciviz_gbuf.capture`             (source)
-``vtkGBufferSobelGradient``    :func:`~sciviz_gbuf.filters.sobel_gradient`    ``sz``
-``vtkGBufferSecondOrder``      :func:`~sciviz_gbuf.filters.second_order`      ``sz``
-``vtkGBufferC1Discontinuity``  :func:`~sciviz_gbuf.filters.c1_discontinuity`  ``sz``
-``vtkGBufferContourLines``     :func:`~sciviz_gbuf.filters.contour_lines`     ``depth``
-``vtkGBufferHatching``         :func:`~sciviz_gbuf.filters.hatching`          ``depth``
-``vtkGBufferHillshade``        :func:`~sciviz_gbuf.filters.hillshade`         active scalars
-``vtkGBufferColorBands``       :func:`~sciviz_gbuf.filters.color_bands`       active scalars
-``vtkGBufferLambert``          :func:`~sciviz_gbuf.filters.lambert`           ``normal``
-``vtkGBufferProfileEdges``     :func:`~sciviz_gbuf.filters.profile_edges`     G-buffer
-``vtkGBufferInternalEdges``    :func:`~sciviz_gbuf.filters.internal_edges`    G-buffer
-``vtkGBufferCreaseEdges``      :func:`~sciviz_gbuf.filters.crease_edges`      G-buffer
-``vtkGBufferIdEdges``          :func:`~sciviz_gbuf.filters.id_edges`          G-buffer
-``vtkGBufferEdgeMap``          :func:`~sciviz_gbuf.filters.edge_map`          G-buffer
-``vtkGBufferReflectionLines``  :func:`~sciviz_gbuf.filters.reflection_lines`  G-buffer
-``vtkGBufferIsophotes``        :func:`~sciviz_gbuf.filters.isophotes`         G-buffer
-=============================  ======================================  =====================
+The classes (:data:`ALGORITHMS` maps the function names to them): ``vtkGBufferCapture``, and
+one filter class per entry of the filters registry (:data:`sciviz_gbuf.filters.registry.FILTERS`),
+named ``vtkGBuffer`` + the function name in CamelCase (``contour_lines`` ->
+``vtkGBufferContourLines``); the table below is generated from the registry.
 
 The result array is named after the function (``SetOutputArrayName`` to change it). Array
 filters pass the input's ``"mask"`` array (the G-buffer coverage) as ``mask=`` when there is
@@ -107,7 +89,6 @@ from vtkmodules.vtkCommonDataModel import vtkDataSet, vtkImageData, vtkMultiBloc
 from vtkmodules.vtkCommonExecutionModel import vtkAlgorithm, vtkStreamingDemandDrivenPipeline
 from vtkmodules.vtkRenderingCore import vtkCamera, vtkRenderer
 
-from . import filters as F
 from .core.camera import VIEWS, CameraInfo
 from .core.capture import (
     DEFAULT_WINDOW_SIZE,
@@ -119,29 +100,7 @@ from .core.capture import (
 from .core.gbuffer import META_KEY, GBuffer
 from .core.scene import is_plotter, scene_items
 from .errors import InputError
-
-__all__ = [
-    "ALGORITHMS",
-    "ARRAY_FILTERS",
-    "GBUFFER_FILTERS",
-    "raise_pipeline_errors",
-    "vtkGBufferC1Discontinuity",
-    "vtkGBufferCapture",
-    "vtkGBufferColorBands",
-    "vtkGBufferContourLines",
-    "vtkGBufferCreaseEdges",
-    "vtkGBufferEdgeMap",
-    "vtkGBufferHatching",
-    "vtkGBufferHillshade",
-    "vtkGBufferIdEdges",
-    "vtkGBufferInternalEdges",
-    "vtkGBufferIsophotes",
-    "vtkGBufferLambert",
-    "vtkGBufferProfileEdges",
-    "vtkGBufferReflectionLines",
-    "vtkGBufferSecondOrder",
-    "vtkGBufferSobelGradient",
-]
+from .filters.registry import FILTERS
 
 _SDDP = vtkStreamingDemandDrivenPipeline
 
@@ -860,64 +819,30 @@ def _fill_levels(p: dict[str, Any]) -> dict[str, Any]:
     return p
 
 
-vtkGBufferSobelGradient = _make(
-    "vtkGBufferSobelGradient", _ArrayFilter, F.sobel_gradient, default_input="sz"
-)
-vtkGBufferSecondOrder = _make(
-    "vtkGBufferSecondOrder", _ArrayFilter, F.second_order, default_input="sz"
-)
-vtkGBufferC1Discontinuity = _make(
-    "vtkGBufferC1Discontinuity", _ArrayFilter, F.c1_discontinuity, default_input="sz"
-)
-vtkGBufferContourLines = _make(
-    "vtkGBufferContourLines",
-    _ArrayFilter,
-    F.contour_lines,
-    default_input="depth",
-    dry_fill=_fill_levels,
-)
-vtkGBufferHatching = _make("vtkGBufferHatching", _ArrayFilter, F.hatching, default_input="depth")
-vtkGBufferHillshade = _make("vtkGBufferHillshade", _ArrayFilter, F.hillshade)
-vtkGBufferColorBands = _make(
-    "vtkGBufferColorBands", _ArrayFilter, F.color_bands, dry_fill=_fill_levels
-)
-vtkGBufferLambert = _make(
-    "vtkGBufferLambert", _ArrayFilter, F.lambert, default_input="normal", dry_components=3
-)
-vtkGBufferProfileEdges = _make("vtkGBufferProfileEdges", _GBufferFilter, F.profile_edges)
-vtkGBufferInternalEdges = _make("vtkGBufferInternalEdges", _GBufferFilter, F.internal_edges)
-vtkGBufferCreaseEdges = _make("vtkGBufferCreaseEdges", _GBufferFilter, F.crease_edges)
-vtkGBufferIdEdges = _make("vtkGBufferIdEdges", _GBufferFilter, F.id_edges)
-vtkGBufferEdgeMap = _make("vtkGBufferEdgeMap", _GBufferFilter, F.edge_map)
-vtkGBufferReflectionLines = _make("vtkGBufferReflectionLines", _GBufferFilter, F.reflection_lines)
-vtkGBufferIsophotes = _make("vtkGBufferIsophotes", _GBufferFilter, F.isophotes)
+def _class_name(name: str) -> str:
+    return "vtkGBuffer" + _camel(name)
+
+
+# One class per entry of the filters registry, bound as a module attribute of its own name.
+_CLASSES: dict[str, type[_ParamFilter]] = {}
+for _name, _f in FILTERS.items():
+    _CLASSES[_name] = _make(
+        _class_name(_name),
+        _ArrayFilter if _f.takes == "array" else _GBufferFilter,
+        _f.func,
+        default_input=_f.default_input,
+        dry_components=_f.components,
+        dry_fill=_fill_levels if _f.needs_levels else None,
+    )
+    globals()[_CLASSES[_name].__name__] = _CLASSES[_name]
 
 #: Array filters by function name: ``vtkImageData`` array -> new array (same size).
 ARRAY_FILTERS: dict[str, type[_ParamFilter]] = {
-    c._func.__name__: c
-    for c in (
-        vtkGBufferSobelGradient,
-        vtkGBufferSecondOrder,
-        vtkGBufferC1Discontinuity,
-        vtkGBufferContourLines,
-        vtkGBufferHatching,
-        vtkGBufferHillshade,
-        vtkGBufferColorBands,
-        vtkGBufferLambert,
-    )
+    n: c for n, c in _CLASSES.items() if FILTERS[n].takes == "array"
 }
 #: G-buffer filters by function name: whole G-buffer image -> new array (output size).
 GBUFFER_FILTERS: dict[str, type[_ParamFilter]] = {
-    c._func.__name__: c
-    for c in (
-        vtkGBufferProfileEdges,
-        vtkGBufferInternalEdges,
-        vtkGBufferCreaseEdges,
-        vtkGBufferIdEdges,
-        vtkGBufferEdgeMap,
-        vtkGBufferReflectionLines,
-        vtkGBufferIsophotes,
-    )
+    n: c for n, c in _CLASSES.items() if FILTERS[n].takes == "gbuffer"
 }
 #: Every algorithm class by name (``"capture"`` and the function names).
 ALGORITHMS: dict[str, type[_GBufferAlgorithm]] = {
@@ -925,3 +850,31 @@ ALGORITHMS: dict[str, type[_GBufferAlgorithm]] = {
     **ARRAY_FILTERS,
     **GBUFFER_FILTERS,
 }
+
+__all__ = [
+    "ALGORITHMS",
+    "ARRAY_FILTERS",
+    "GBUFFER_FILTERS",
+    "raise_pipeline_errors",
+    "vtkGBufferCapture",
+    *sorted(c.__name__ for c in _CLASSES.values()),
+]
+
+
+def _class_table() -> str:
+    rows = [("vtkGBufferCapture", ":func:`sciviz_gbuf.capture`", "(source)")]
+    for name, f in FILTERS.items():
+        where = "G-buffer" if f.takes == "gbuffer" else f"``{f.default_input}``"
+        if f.takes == "array" and f.default_input is None:
+            where = "active scalars"
+        rows.append((_CLASSES[name].__name__, f":func:`~sciviz_gbuf.filters.{name}`", where))
+    widths = [max(len(r[i]) for r in rows) for i in range(3)]
+    rule = "  ".join("=" * w for w in widths)
+    head = ("class", "wraps", "default input array")
+    lines = [rule, "  ".join(h.ljust(w) for h, w in zip(head, widths, strict=True)).rstrip(), rule]
+    lines += ["  ".join(c.ljust(w) for c, w in zip(r, widths, strict=True)).rstrip() for r in rows]
+    return "\n".join([*lines, rule])
+
+
+if __doc__:  # None under python -OO
+    __doc__ += "\nGenerated class table\n---------------------\n\n" + _class_table() + "\n"
