@@ -82,7 +82,7 @@ def colorize(
     if not (np.issubdtype(v.dtype, np.number) or v.dtype == np.bool_) or np.iscomplexobj(v):
         raise InputError(f"values: expected real numbers, got dtype {v.dtype}")
     m = _mask(mask, v.shape)
-    bg = _validate.rgb(background)
+    bg = _validate.rgb(background, "background")
     cm = _validate.colormap(cmap)
     v = v.astype(np.float64)
     valid = np.isfinite(v) if m is None else np.isfinite(v) & m
@@ -134,7 +134,7 @@ def normals_to_rgb(
     if not np.issubdtype(n.dtype, np.floating):
         raise InputError(f"normal: expected floating-point components, got dtype {n.dtype}")
     m = _mask(mask, n.shape[:2])
-    bg = _validate.rgb(background)
+    bg = _validate.rgb(background, "background")
     valid = np.isfinite(n).all(axis=-1)
     if m is not None:
         valid &= m
@@ -171,7 +171,7 @@ def ids_to_rgb(ids: np.ndarray, *, background: _Colour = (1.0, 1.0, 1.0)) -> np.
     a = _array(ids, "ids", 2)
     if not np.issubdtype(a.dtype, np.integer):
         raise InputError(f"ids: expected an integer array, got dtype {a.dtype}")
-    bg = _validate.rgb(background)
+    bg = _validate.rgb(background, "background")
     valid = a >= 0
     x = np.where(valid, a, 0).astype(np.uint64)
     # Fold high bits in (a no-op below 2**24, so the bijection holds there); the offset keeps
@@ -242,7 +242,7 @@ def montage(
         raise InputError(f"columns: expected a positive integer, got {columns!r}")
     if isinstance(padding, bool) or not isinstance(padding, (int, np.integer)) or padding < 0:
         raise InputError(f"padding: expected a non-negative integer, got {padding!r}")
-    bg = tuple(int(c) for c in to_uint8(_validate.rgb(background)[None, None])[0, 0])
+    bg = tuple(int(c) for c in to_uint8(_validate.rgb(background, "background")[None, None])[0, 0])
 
     tile_h = max(t.shape[0] for _, t in tiles)
     tile_w = max(t.shape[1] for _, t in tiles)
