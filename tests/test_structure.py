@@ -260,7 +260,9 @@ def test_checkers_find_each_kind_of_violation(tmp_path):
             "__init__.py": "",
             "errors.py": "def f():\n    from .filters import g\n",  # function-level back edge
             "filters/__init__.py": "from .a import g\n",
-            "filters/a.py": "from . import _k_kernels\nimport numba\n\ndef g():\n    from . import b\n",
+            "filters/a.py": (
+                "from . import _k_kernels\nimport numba\n\ndef g():\n    from . import b\n"
+            ),
             "filters/b.py": "from .a import g\n",  # a <-> b only through a function import
             "filters/_k_kernels.py": "import numba\n",
             "core/__init__.py": "from ..filters._k_kernels import x\nfrom ..filters.a import _y\n",

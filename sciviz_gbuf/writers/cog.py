@@ -23,7 +23,7 @@ import numpy as np
 from .. import _dask
 from .._progress import progress
 from ..errors import InputError, SciVizGBufError
-from .geotiff import georeference, rasterio_crs
+from .geotiff import georeference, rasterio_crs, uint8_profile
 from .png import to_uint8, write_png
 
 __all__ = ["local_client", "write_cog"]
@@ -303,30 +303,17 @@ def _profile(h: int, w: int, c: int, dem: Any, transform: Any, crs: Any) -> dict
     if dem is not None and transform is None and crs is None and tuple(dem.shape) != (h, w):
         raise InputError(f"dem: its shape {tuple(dem.shape)} is not the image's {(h, w)}")
     gt = georeference(dem, transform, crs, "write_cog")
-    crs_obj = rasterio_crs(dem.crs if dem is not None else crs)
-    profile = {
-        "driver": "GTiff",
-        "width": w,
-        "height": h,
-        "count": c,
-        "dtype": "uint8",
-        "crs": crs_obj,
-        "transform": Affine.from_gdal(*gt),
-        "tiled": True,
-        "blockxsize": BLOCK,
-        "blockysize": BLOCK,
-        # Temporary: fastest deflate; the COG copy recompresses anyway.
-        "compress": "deflate",
-        "zlevel": 1,
-        "interleave": "pixel",
-        "bigtiff": "if_safer",
-        "num_threads": "ALL_CPUS",
-    }
-    if c >= 3:
-        profile["photometric"] = "RGB"
-    if c == 4:
-        profile["alpha"] = "unassociated"
-    return profile
+    # Temporary: fastest deflate; the COG copy recompresses anyway.
+    return uint8_profile(
+        h,
+        w,
+        c,
+        Affine.from_gdal(*gt),
+        rasterio_crs(dem.crs if dem is not None else crs),
+        block=BLOCK,
+        zlevel=1,
+        bigtiff=True,
+    )
 
 
 class _WindowWriter:

@@ -12,7 +12,7 @@ import numpy as np
 from ..errors import InputError
 from .png import LARGE_IMAGE, to_uint8
 
-__all__ = ["georeference", "rasterio_crs", "write_geotiff"]
+__all__ = ["georeference", "rasterio_crs", "uint8_profile", "write_geotiff"]
 
 
 def georeference(dem: object, transform: object, crs: object, who: str) -> np.ndarray:
@@ -39,6 +39,48 @@ def rasterio_crs(crs: object):
         return None if crs is None else CRS.from_user_input(crs)
     except Exception as exc:  # rasterio raises its own CRSError family
         raise InputError(f"crs: rasterio cannot read {str(crs)[:80]!r}: {exc}") from exc
+
+
+def uint8_profile(
+    h: int,
+    w: int,
+    c: int,
+    transform: object,
+    crs: object,
+    *,
+    block: int | None,
+    zlevel: int,
+    predictor: int | None = None,
+    bigtiff: bool = False,
+) -> dict:
+    """The rasterio profile of every 8-bit GeoTIFF written here (:func:`write_geotiff` and the
+    tiled intermediate of the Cloud-Optimized GeoTIFF): deflate, pixel-interleaved, RGB(A)
+    photometry, the last band of 2 or 4 an unassociated alpha (GIS software shows nodata as
+    transparent). ``block``: square tiles of this size (None: strips)."""
+    profile = {
+        "driver": "GTiff",
+        "width": w,
+        "height": h,
+        "count": c,
+        "dtype": "uint8",
+        "crs": crs,
+        "transform": transform,
+        "compress": "deflate",
+        "zlevel": zlevel,
+        "num_threads": "ALL_CPUS",
+        "interleave": "pixel",
+    }
+    if predictor is not None:
+        profile["predictor"] = predictor
+    if block is not None:
+        profile.update(tiled=True, blockxsize=block, blockysize=block)
+    if bigtiff:
+        profile["bigtiff"] = "if_safer"
+    if c >= 3:
+        profile["photometric"] = "RGB"
+    if c in (2, 4):
+        profile["alpha"] = "unassociated"
+    return profile
 
 
 def write_geotiff(
@@ -86,28 +128,17 @@ def write_geotiff(
         raise InputError(
             f"{p}: writing GeoTIFF needs rasterio: pip install 'sciviz-gbuf[geo]'"
         ) from exc
-    crs_obj = rasterio_crs(dem.crs if dem is not None else crs)
     h, w, c = pixels.shape
-    profile = {
-        "driver": "GTiff",
-        "width": w,
-        "height": h,
-        "count": c,
-        "dtype": "uint8",
-        "crs": crs_obj,
-        "transform": Affine.from_gdal(*gt),
-        "compress": "deflate",
-        "zlevel": 1 if h * w >= LARGE_IMAGE else 6,
-        "predictor": 2,
-        "num_threads": "ALL_CPUS",
-        "interleave": "pixel",
-    }
-    if h >= 256 and w >= 256:
-        profile.update(tiled=True, blockxsize=256, blockysize=256)
-    if c >= 3:
-        profile["photometric"] = "RGB"
-    if c in (2, 4):
-        profile["alpha"] = "unassociated"
+    profile = uint8_profile(
+        h,
+        w,
+        c,
+        Affine.from_gdal(*gt),
+        rasterio_crs(dem.crs if dem is not None else crs),
+        block=256 if h >= 256 and w >= 256 else None,
+        zlevel=1 if h * w >= LARGE_IMAGE else 6,
+        predictor=2,
+    )
     interp = {
         1: [ColorInterp.gray],
         2: [ColorInterp.gray, ColorInterp.alpha],

@@ -32,12 +32,18 @@ def test_npr_image_is_the_style_function_in_8_bit(nut_gb, style):
         "toon": lambda: styles.toon(nut_gb),
         "hatch": lambda: styles.hatch(nut_gb),
         # the nut has no texture coordinates: sections along one world axis
-        "lines": lambda: styles.line_drawing(with_section_uv(nut_gb), combo="shu"),
+        "drawing": lambda: styles.line_drawing(with_section_uv(nut_gb), combo="shu"),
     }[style]()
     if direct.ndim == 2:
         direct = np.repeat(direct[..., None], 3, axis=2)
     assert np.abs(img.astype(int) - np.rint(direct * 255)).max() <= 1
     assert img[0, 0].tolist() == [255, 255, 255]  # paper
+
+
+def test_old_style_name_lines_is_the_drawing(nut_gb, tmp_path):
+    assert np.array_equal(npr_image(nut_gb, style="lines"), npr_image(nut_gb, style="drawing"))
+    with pytest.raises(InputError, match="style: expected one of"):
+        npr_image(nut_gb, style="fig7")  # an illustrate style, not an NPR one
 
 
 def test_section_uv_are_world_coordinates_across_the_line_of_sight(nut_gb):
