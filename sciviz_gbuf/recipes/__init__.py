@@ -1,7 +1,5 @@
 """Recipes: the data flow capture -> filters -> compose, packaged for one kind of picture each.
 
-- :mod:`.framing`: cameras that frame a bounding box from a given direction.
-- :mod:`.illustration`: shaded + edge illustrations of a G-buffer (the ``edges`` command).
 - :mod:`.saito1990`: the panels of Saito & Takahashi's Fig. 3 and Fig. 7 (and the 2003 edge map).
 - :mod:`.terrain`: plan-view topographic maps of DEMs (bands, relief, contours; Fig. 11).
 - :mod:`.birdseye`: bird's-eye maps and the sumi-e of DEMs (Figs. 12, 13).
@@ -10,6 +8,11 @@
   isophotes, curvature maps, contours; :func:`seam_patches` builds the paper's C1 surface.
 - :mod:`.contour_figures`: the panels of their Fig. 5 (contour lines), Fig. 6 (curved hatching)
   and Fig. 11 (a plan-view topographic map of the bundled DEM).
+- :mod:`.npr`: one NPR picture of any scene by style name (the ``mesh`` command).
+
+Shared layers live in the private :mod:`._map` and :mod:`._intervals`. The cameras
+(:mod:`sciviz_gbuf.core.framing`) and the illustrations (:mod:`sciviz_gbuf.styles.illustration`)
+that used to live here are re-exported under their old names.
 """
 
 from ..core.framing import (

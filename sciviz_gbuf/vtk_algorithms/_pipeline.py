@@ -1,126 +1,60 @@
-"""VTK pipeline algorithms: :func:`~sciviz_gbuf.capture` and the filters as VTK filters.
-
-Each class is a :class:`~vtkmodules.util.vtkAlgorithm.VTKPythonAlgorithmBase` subclass, so it
-chains with ``SetInputConnection`` and with plain VTK image filters, and VTK's demand-driven
-pipeline re-executes it only when it, or something upstream of it, was modified.
-
-- :class:`vtkGBufferCapture` (source, no input): a scene -> ``vtkImageData`` holding every
-  G-buffer channel as a named point array, exactly :meth:`GBuffer.to_pyvista` (row 0 of the
-  G-buffer is the top row, i.e. the *last* VTK row; the camera metadata travels in field data).
-- Array filters (``vtkImageData`` -> ``vtkImageData``): the input's named point array, as an
-  ``(H, W)`` or ``(H, W, k)`` image in G-buffer row order, goes through the numpy function;
-  the output is a shallow copy of the input plus the result as a new named point array,
-  which becomes the active scalars (what plain VTK image filters process).
-  :data:`ARRAY_FILTERS` lists them.
-- G-buffer filters (``vtkImageData`` -> ``vtkImageData``): the input must carry a whole
-  G-buffer (the output of :class:`vtkGBufferCapture`, or of array filters after it, which keep
-  it); it is rebuilt with :meth:`GBuffer.from_pyvista` and the function applied.
-  :data:`GBUFFER_FILTERS` lists them. Their results are at the G-buffer's *output* size: for
-  ``supersample == 1`` the output is the input plus the new array, for ``supersample > 1`` it
-  is a new, smaller image holding only the new array (the full-size channels do not fit it).
-
-Every keyword parameter of the wrapped function has a ``Set<Name>``/``Get<Name>`` pair
-(``width`` -> ``SetWidth``, ``crease_angle`` -> ``SetCreaseAngle``), plus the generic
-``SetParameter(name, value)`` / ``GetParameter(name)``. A setter calls ``Modified()`` only when
-the value changes, and validates first: the function is run on a tiny synthetic input with the
-new value, so a bad value raises :class:`~sciviz_gbuf.errors.InputError` from the setter and
-leaves the algorithm unchanged.
-
-Errors while the pipeline executes (say an input array that does not exist) cannot propagate
-through VTK's C++ executive as Python exceptions. They are caught in ``RequestData``, the output
-is emptied (never stale), VTK reports the failed request on its output window, the exception is
-kept in ``last_error`` and it is raised again by ``Update()`` of any algorithm of this module
-at or downstream of the failing one (even through plain VTK filters in between). When a plain
-VTK algorithm is updated instead, call :func:`raise_pipeline_errors` on it.
-
-``execution_count`` counts ``RequestData`` calls (for checking laziness).
-
-The classes (:data:`ALGORITHMS` maps the function names to them): ``vtkGBufferCapture``, and
-one filter class per entry of the filters registry (:data:`sciviz_gbuf.filters.registry.FILTERS`),
-named ``vtkGBuffer`` + the function name in CamelCase (``contour_lines`` ->
-``vtkGBufferContourLines``); the table below is generated from the registry.
-
-The result array is named after the function (``SetOutputArrayName`` to change it). Array
-filters pass the input's ``"mask"`` array (the G-buffer coverage) as ``mask=`` when there is
-one (``SetMaskArrayName(None)`` to stop that); ``SetInputComponent(i)`` takes one component of
-a vector array, e.g. ``SetInputArrayName("world")`` + ``SetInputComponent(2)`` for heights.
-
-Image extents are announced before execution (``RequestInformation``), as VTK image filters
-downstream need: the capture's from its window size and supersampling, a G-buffer filter's
-output size from the supersampling found upstream (through this module's algorithms, plain VTK
-filters assumed to keep the size, or data given with ``SetInputData``). If it cannot be found
-and the G-buffer turns out supersampled, the G-buffer filter fails with :class:`InputError`
-rather than hand VTK an image of another size than announced.
-
-As with any VTK algorithm, an output port does not keep its algorithm alive: keep a Python
-reference to each algorithm (``b.SetInputConnection(A().GetOutputPort())`` crashes).
-
-The algorithms do not watch the scene given to :meth:`vtkGBufferCapture.SetScene`: after
-editing the datasets, actors or camera in it, call ``Modified()`` on the capture.
-
-Examples
---------
->>> import pyvista as pv
->>> from sciviz_gbuf.vtk_algorithms import vtkGBufferCapture, vtkGBufferEdgeMap
->>> cap = vtkGBufferCapture()
->>> cap.SetScene(pv.Sphere())
->>> cap.SetWindowSize(64, 48)
->>> edges = vtkGBufferEdgeMap()
->>> edges.SetInputConnection(cap.GetOutputPort())
->>> edges.SetWidth(2)
->>> edges.Update()
-True
->>> pv.wrap(edges.GetOutput()).point_data["edge_map"].shape
-(3072, 4)
-"""
+"""The generic machinery of :mod:`sciviz_gbuf.vtk_algorithms`: a ``VTKPythonAlgorithmBase``
+base that keeps errors and execution counts, array <-> ``vtkImageData`` conversion, and the
+parameterised filter classes made from a numpy function (validated ``Set<Name>`` setters that
+call ``Modified()`` only on a change, dry runs on a tiny input)."""
 
 from __future__ import annotations
 
 import inspect
 import json
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 import pyvista as pv
 from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
 from vtkmodules.util.vtkAlgorithm import VTKPythonAlgorithmBase
-from vtkmodules.vtkCommonDataModel import vtkDataSet, vtkImageData, vtkMultiBlockDataSet
+from vtkmodules.vtkCommonDataModel import vtkImageData
 from vtkmodules.vtkCommonExecutionModel import vtkAlgorithm, vtkStreamingDemandDrivenPipeline
-from vtkmodules.vtkRenderingCore import vtkCamera, vtkRenderer
+from vtkmodules.vtkRenderingCore import vtkCamera
 
-from .core.camera import VIEWS, CameraInfo
-from .core.capture import (
-    DEFAULT_WINDOW_SIZE,
-    capture,
-    check_scalars,
-    check_window_size,
-    resolve_camera,
-)
-from .core.gbuffer import META_KEY, GBuffer
-from .core.scene import is_plotter, scene_items
-from .errors import InputError
-from .filters.registry import FILTERS
+from ..core.camera import CameraInfo
+from ..core.gbuffer import META_KEY, GBuffer
+from ..errors import InputError
 
-_SDDP = vtkStreamingDemandDrivenPipeline
+__all__ = [
+    "SDDP",
+    "ArrayFilter",
+    "GBufferAlgorithm",
+    "GBufferFilter",
+    "ParamFilter",
+    "camel",
+    "fill_levels",
+    "freeze",
+    "make_filter_class",
+    "raise_pipeline_errors",
+    "same_value",
+]
+
+SDDP = vtkStreamingDemandDrivenPipeline
 
 
 # ---------------------------------------------------------------------------- helpers
-def _freeze(value: Any) -> Any:
+def freeze(value: Any) -> Any:
     """A hashable, comparable form of a parameter value (sequences and arrays -> tuples)."""
     if isinstance(value, np.ndarray):
-        return _freeze(value.tolist())
+        return freeze(value.tolist())
     if isinstance(value, (list, tuple)):
-        return tuple(_freeze(v) for v in value)
+        return tuple(freeze(v) for v in value)
     if isinstance(value, np.generic):
         return value.item()
     return value
 
 
-def _same(a: Any, b: Any) -> bool:
+def same_value(a: Any, b: Any) -> bool:
     # NaN != NaN would make "set to the current value" look like a change: compare the frozen
     # forms, treating identical NaN positions as equal
-    fa, fb = _freeze(a), _freeze(b)
+    fa, fb = freeze(a), freeze(b)
     if fa is None or fb is None:  # np.asarray(None, float) is NaN: keep None distinct
         return fa is fb
     try:
@@ -132,7 +66,7 @@ def _same(a: Any, b: Any) -> bool:
         return False
 
 
-def _camel(name: str) -> str:
+def camel(name: str) -> str:
     return "".join(part[:1].upper() + part[1:] for part in name.split("_"))
 
 
@@ -232,7 +166,7 @@ def _upstream_supersample(alg: vtkAlgorithm) -> int | None:
         if a.GetNumberOfInputPorts() == 0 or a.GetNumberOfInputConnections(0) == 0:
             return None
         up = a.GetInputAlgorithm(0, 0)
-        if isinstance(up, _GBufferAlgorithm):
+        if isinstance(up, GBufferAlgorithm):
             return up._supersample_hint()
         if up is None:
             return None
@@ -243,7 +177,7 @@ def _upstream_supersample(alg: vtkAlgorithm) -> int | None:
 
 
 # ---------------------------------------------------------------------------- base
-class _GBufferAlgorithm(VTKPythonAlgorithmBase):
+class GBufferAlgorithm(VTKPythonAlgorithmBase):
     """Execution counting, error capture and error re-raising shared by all algorithms."""
 
     def __init__(self, n_inputs: int) -> None:
@@ -293,226 +227,6 @@ class _GBufferAlgorithm(VTKPythonAlgorithmBase):
         raise NotImplementedError
 
 
-# ---------------------------------------------------------------------------- capture
-def _renderer_scene(ren: vtkRenderer) -> list[pv.DataSet]:
-    """World-space copies of the datasets of a vtkRenderer's visible actors."""
-    out = []
-    actors = ren.GetActors()
-    actors.InitTraversal()
-    for _ in range(actors.GetNumberOfItems()):
-        actor = actors.GetNextActor()
-        if not actor.GetVisibility() or actor.GetMapper() is None:
-            continue
-        mapper = actor.GetMapper()
-        producer = mapper.GetInputAlgorithm()
-        if producer is not None:
-            # a mapper fed by a connection holds its producer's output, possibly out of date
-            producer.Update()
-        data = mapper.GetInputDataObject(0, 0)
-        if not isinstance(data, (vtkDataSet, vtkMultiBlockDataSet)):
-            continue
-        m = actor.GetMatrix()
-        mat = np.array([[m.GetElement(i, j) for j in range(4)] for i in range(4)])
-        ds = pv.wrap(data)
-        if isinstance(ds, pv.MultiBlock):
-            ds = ds.combine(merge_points=False)
-        out.append(ds if np.allclose(mat, np.eye(4)) else ds.transform(mat, inplace=False))
-    if not out:
-        raise InputError("scene: the vtkRenderer has no visible actor with a dataset to capture")
-    return out
-
-
-def _camera_key(camera: object) -> Any:
-    """What makes two camera arguments equal (vtkCameras by their state, not identity)."""
-    if isinstance(camera, vtkCamera):
-        return (
-            "vtkCamera",
-            tuple(camera.GetPosition()),
-            tuple(camera.GetFocalPoint()),
-            tuple(camera.GetViewUp()),
-            camera.GetViewAngle(),
-            bool(camera.GetParallelProjection()),
-            camera.GetParallelScale(),
-        )
-    if isinstance(camera, CameraInfo):
-        return ("CameraInfo", camera.to_json())
-    return _freeze(camera)
-
-
-class vtkGBufferCapture(_GBufferAlgorithm):
-    """:func:`sciviz_gbuf.capture` as a VTK source: scene -> G-buffer ``vtkImageData``.
-
-    The output is :meth:`GBuffer.to_pyvista` of the capture: one point per buffer pixel
-    (``supersample`` times the window size), the channels (``depth``, ``sz``, ``normal``,
-    ``world``, ``object_id``, ``cell_id``, ``mask`` as uint8, ``uv``, ``scalars:<name>``) as
-    point arrays, the camera and metadata in field data, so :meth:`GBuffer.from_pyvista`
-    (and the G-buffer filters of this module) rebuild the exact G-buffer.
-
-    Parameters are set with ``SetScene``, ``SetWindowSize``, ``SetSupersample``, ``SetCamera``,
-    ``SetCameraPosition``, ``SetParallelProjection``, ``SetScalars`` and ``SetFeatureAngle``
-    (the arguments of :func:`~sciviz_gbuf.capture`). Each validates its value (raising
-    :class:`InputError`) and calls ``Modified()`` only when the value changes.
-    """
-
-    def __init__(self) -> None:
-        super().__init__(0)
-        self._scene: object = None
-        self._window_size: tuple[int, int] | None = None
-        self._supersample = 1
-        self._camera: object = None
-        self._camera_key: Any = None
-        self._parallel: bool | None = None
-        self._scalars: tuple[str, ...] = ()
-        self._feature_angle = 30.0
-
-    # -- parameters
-    def SetScene(self, scene: object) -> None:
-        """A dataset, a sequence of them, a ``pyvista.Plotter`` or a ``vtkRenderer``.
-
-        Its visible actors and, unless a camera is set, its camera are used (for a
-        vtkRenderer: its active camera as it is, and its render window's size by default).
-        The scene is not watched: call ``Modified()`` after editing it.
-        """
-        if scene is self._scene:
-            return
-        if not isinstance(scene, vtkRenderer):
-            scene_items(scene)  # validates: raises InputError for an empty or bad scene
-        self._scene = scene
-        self.Modified()
-
-    def GetScene(self) -> object:
-        return self._scene
-
-    def SetWindowSize(self, width: int | Sequence[int], height: int | None = None) -> None:
-        """Output ``(width, height)``; ``None`` (the default): the scene's or 1024x768."""
-        if width is None:
-            size = None
-        else:
-            size = check_window_size(width if height is None else (width, height))
-        if size != self._window_size:
-            self._window_size = size
-            self.Modified()
-
-    def GetWindowSize(self) -> tuple[int, int]:
-        """The window size that will be captured (resolved from the scene if not set)."""
-        if self._window_size is not None:
-            return self._window_size
-        if is_plotter(self._scene):
-            return tuple(int(v) for v in self._scene.window_size)  # type: ignore[union-attr]
-        if isinstance(self._scene, vtkRenderer) and self._scene.GetRenderWindow() is not None:
-            w, h = self._scene.GetRenderWindow().GetSize()
-            if w > 0 and h > 0:
-                return int(w), int(h)
-        return DEFAULT_WINDOW_SIZE
-
-    def SetSupersample(self, k: int) -> None:
-        if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1:
-            raise InputError(f"supersample: expected a positive integer, got {k!r}")
-        if int(k) != self._supersample:
-            self._supersample = int(k)
-            self.Modified()
-
-    def GetSupersample(self) -> int:
-        return self._supersample
-
-    def SetCamera(self, camera: object) -> None:
-        """Anything :func:`capture` takes as ``camera`` (None: the scene's, else ``'iso'``).
-
-        A ``vtkCamera`` is copied now; changing it later has no effect until set again.
-        """
-        if isinstance(camera, str):
-            if camera not in VIEWS:
-                raise InputError(
-                    f"camera: unknown view {camera!r}; expected one of {sorted(VIEWS)}"
-                )
-        elif camera is not None:
-            resolve_camera(camera, None, None)  # validates (raises InputError)
-        key = _camera_key(camera)
-        if (camera is None) == (self._camera is None) and _same(key, self._camera_key):
-            return
-        if isinstance(camera, vtkCamera):
-            copy = vtkCamera()
-            copy.DeepCopy(camera)
-            camera = copy
-        self._camera = camera
-        self._camera_key = key
-        self.Modified()
-
-    def SetCameraPosition(
-        self,
-        position: Sequence[float],
-        focal_point: Sequence[float],
-        view_up: Sequence[float],
-    ) -> None:
-        """Shorthand for ``SetCamera((position, focal_point, view_up))``."""
-        self.SetCamera(
-            tuple(tuple(float(v) for v in vec) for vec in (position, focal_point, view_up))
-        )
-
-    def GetCamera(self) -> object:
-        return self._camera
-
-    def SetParallelProjection(self, parallel: bool | None) -> None:
-        """Force orthographic (True) or perspective (False); None: as the camera is."""
-        if parallel is not None and not isinstance(parallel, (bool, np.bool_, int)):
-            raise InputError(f"parallel_projection: expected a bool or None, got {parallel!r}")
-        value = None if parallel is None else bool(parallel)
-        if value != self._parallel:
-            self._parallel = value
-            self.Modified()
-
-    def SetScalars(self, scalars: str | Sequence[str]) -> None:
-        names = check_scalars(scalars)
-        if names != self._scalars:
-            self._scalars = names
-            self.Modified()
-
-    def SetFeatureAngle(self, angle: float) -> None:
-        try:
-            value = float(angle)
-        except (TypeError, ValueError):
-            value = float("nan")
-        if not (np.isfinite(value) and 0 <= value <= 180):
-            raise InputError(f"feature_angle: expected degrees in [0, 180], got {angle!r}")
-        if value != self._feature_angle:
-            self._feature_angle = value
-            self.Modified()
-
-    def _supersample_hint(self) -> int | None:
-        return self._supersample
-
-    # -- pipeline
-    def RequestInformation(self, request, inInfo, outInfo):
-        # downstream image filters need the extent before any data exists
-        w, h = self.GetWindowSize()
-        k = self._supersample
-        info = outInfo.GetInformationObject(0)
-        info.Set(_SDDP.WHOLE_EXTENT(), (0, w * k - 1, 0, h * k - 1, 0, 0), 6)
-        info.Set(vtkImageData.SPACING(), (1.0, 1.0, 1.0), 3)
-        info.Set(vtkImageData.ORIGIN(), (0.0, 0.0, 0.0), 3)
-        return 1
-
-    def _execute(self, inInfo: Any, output: vtkImageData, out_info: Any) -> None:
-        if self._scene is None:
-            raise InputError("vtkGBufferCapture: no scene; call SetScene() first")
-        scene = self._scene
-        camera = self._camera
-        if isinstance(scene, vtkRenderer):
-            if camera is None:
-                camera = scene.GetActiveCamera()
-            scene = _renderer_scene(scene)
-        gb = capture(
-            scene,
-            window_size=self.GetWindowSize(),
-            camera=camera,
-            parallel_projection=self._parallel,
-            scalars=self._scalars,
-            supersample=self._supersample,
-            feature_angle=self._feature_angle,
-        )
-        output.ShallowCopy(gb.to_pyvista())
-
-
 # ---------------------------------------------------------------------------- filters
 def _dummy_gbuffer() -> GBuffer:
     """An 8x8 G-buffer of a plane facing the camera: a cheap input for validating parameters."""
@@ -553,7 +267,7 @@ def _dummy_input(kind: str, components: int) -> Any:
     return _DUMMY[key]
 
 
-class _ParamFilter(_GBufferAlgorithm):
+class ParamFilter(GBufferAlgorithm):
     """Keyword parameters of a wrapped function: validated setters that call Modified()."""
 
     _func: Callable[..., np.ndarray]
@@ -585,7 +299,7 @@ class _ParamFilter(_GBufferAlgorithm):
         if value is None:
             if name not in self._values:
                 return
-        elif _same(self.GetParameter(name), value):
+        elif same_value(self.GetParameter(name), value):
             return
         candidate = dict(self._values)
         if value is None:
@@ -639,28 +353,28 @@ class _ParamFilter(_GBufferAlgorithm):
         return self._output_name
 
 
-def _add_accessors(cls: type[_ParamFilter]) -> None:
+def _add_accessors(cls: type[ParamFilter]) -> None:
     """``Set<Name>``/``Get<Name>`` for every keyword parameter of the wrapped function."""
     for pname in cls._params:
-        camel = _camel(pname)
+        suffix = camel(pname)
 
-        def setter(self: _ParamFilter, *value: Any, _p: str = pname) -> None:
+        def setter(self: ParamFilter, *value: Any, _p: str = pname) -> None:
             # SetLight(0, 0, 1) and SetLight((0, 0, 1)) both work, as in VTK
             self.SetParameter(_p, value[0] if len(value) == 1 else value)
 
-        def getter(self: _ParamFilter, _p: str = pname) -> Any:
+        def getter(self: ParamFilter, _p: str = pname) -> Any:
             return self.GetParameter(_p)
 
-        setter.__name__ = f"Set{camel}"
+        setter.__name__ = f"Set{suffix}"
         setter.__doc__ = f"Set ``{pname}`` of :func:`{cls._func.__name__}` (None: default)."
-        getter.__name__ = f"Get{camel}"
+        getter.__name__ = f"Get{suffix}"
         getter.__doc__ = f"``{pname}`` of :func:`{cls._func.__name__}`."
         if not hasattr(cls, setter.__name__):
             setattr(cls, setter.__name__, setter)
             setattr(cls, getter.__name__, getter)
 
 
-class _ArrayFilter(_ParamFilter):
+class ArrayFilter(ParamFilter):
     """A numpy image function on one named point array of a vtkImageData.
 
     ``SetInputArrayName(name)`` picks the array (None: the active scalars),
@@ -732,7 +446,7 @@ class _ArrayFilter(_ParamFilter):
         _write_array(output, self._output_name, result)
 
 
-class _GBufferFilter(_ParamFilter):
+class GBufferFilter(ParamFilter):
     """A function of a whole GBuffer, rebuilt from the input image (capture's output)."""
 
     _kind = "gbuffer"
@@ -745,10 +459,10 @@ class _GBufferFilter(_ParamFilter):
         # known from upstream (otherwise the input's extent, right for supersample == 1)
         k = _upstream_supersample(self)
         in_info = inInfo[0].GetInformationObject(0)
-        if k and k > 1 and in_info.Has(_SDDP.WHOLE_EXTENT()):
-            ext = in_info.Get(_SDDP.WHOLE_EXTENT())
+        if k and k > 1 and in_info.Has(SDDP.WHOLE_EXTENT()):
+            ext = in_info.Get(SDDP.WHOLE_EXTENT())
             w, h = (ext[1] - ext[0] + 1) // k, (ext[3] - ext[2] + 1) // k
-            outInfo.GetInformationObject(0).Set(_SDDP.WHOLE_EXTENT(), (0, w - 1, 0, h - 1, 0, 0), 6)
+            outInfo.GetInformationObject(0).Set(SDDP.WHOLE_EXTENT(), (0, w - 1, 0, h - 1, 0, 0), 6)
         return 1
 
     def _execute(self, inInfo: Any, output: vtkImageData, out_info: Any) -> None:
@@ -760,7 +474,7 @@ class _GBufferFilter(_ParamFilter):
             output.ShallowCopy(image)
         else:
             h, w = gb.output_shape
-            announced = out_info.Get(_SDDP.WHOLE_EXTENT())
+            announced = out_info.Get(SDDP.WHOLE_EXTENT())
             if announced is not None and tuple(announced) != (0, w - 1, 0, h - 1, 0, 0):
                 # downstream VTK filters were promised another size: fail rather than let them
                 # read past the image (supersampling was not known before executing)
@@ -775,15 +489,15 @@ class _GBufferFilter(_ParamFilter):
         _write_array(output, self._output_name, result)
 
 
-def _make(
+def make_filter_class(
     name: str,
-    base: type[_ParamFilter],
+    base: type[ParamFilter],
     func: Callable[..., np.ndarray],
     *,
     default_input: str | None = None,
     dry_components: int = 1,
     dry_fill: Callable[[dict[str, Any]], dict[str, Any]] | None = None,
-) -> type[_ParamFilter]:
+) -> type[ParamFilter]:
     # keyword parameters that are images come from arrays (mask), not setters
     params = tuple(
         p.name
@@ -796,13 +510,13 @@ def _make(
         "_dry_components": dry_components,
         "__doc__": (
             f":func:`sciviz_gbuf.filters.{func.__name__}` as a VTK filter "
-            f"({'array' if base is _ArrayFilter else 'G-buffer'} filter; output array "
+            f"({'array' if base is ArrayFilter else 'G-buffer'} filter; output array "
             f"``{func.__name__!r}``).\n\nParameters (``Set<Name>``/``Get<Name>`` or "
             f"``SetParameter``): {', '.join(params)}."
         ),
-        "__module__": __name__,
+        "__module__": __name__.rpartition(".")[0],  # the public sciviz_gbuf.vtk_algorithms
     }
-    if base is _ArrayFilter:
+    if base is ArrayFilter:
         ns["_default_input"] = default_input
         ns["__doc__"] += f" Default input array: {default_input or 'the active scalars'!s}."
     if dry_fill is not None:
@@ -812,69 +526,8 @@ def _make(
     return cls
 
 
-def _fill_levels(p: dict[str, Any]) -> dict[str, Any]:
+def fill_levels(p: dict[str, Any]) -> dict[str, Any]:
     # contour_lines / color_bands need interval= or levels=; dry-run with one if neither is set
     if "interval" not in p and "levels" not in p:
         return {**p, "interval": 1.0}
     return p
-
-
-def _class_name(name: str) -> str:
-    return "vtkGBuffer" + _camel(name)
-
-
-# One class per entry of the filters registry, bound as a module attribute of its own name.
-_CLASSES: dict[str, type[_ParamFilter]] = {}
-for _name, _f in FILTERS.items():
-    _CLASSES[_name] = _make(
-        _class_name(_name),
-        _ArrayFilter if _f.takes == "array" else _GBufferFilter,
-        _f.func,
-        default_input=_f.default_input,
-        dry_components=_f.components,
-        dry_fill=_fill_levels if _f.needs_levels else None,
-    )
-    globals()[_CLASSES[_name].__name__] = _CLASSES[_name]
-
-#: Array filters by function name: ``vtkImageData`` array -> new array (same size).
-ARRAY_FILTERS: dict[str, type[_ParamFilter]] = {
-    n: c for n, c in _CLASSES.items() if FILTERS[n].takes == "array"
-}
-#: G-buffer filters by function name: whole G-buffer image -> new array (output size).
-GBUFFER_FILTERS: dict[str, type[_ParamFilter]] = {
-    n: c for n, c in _CLASSES.items() if FILTERS[n].takes == "gbuffer"
-}
-#: Every algorithm class by name (``"capture"`` and the function names).
-ALGORITHMS: dict[str, type[_GBufferAlgorithm]] = {
-    "capture": vtkGBufferCapture,
-    **ARRAY_FILTERS,
-    **GBUFFER_FILTERS,
-}
-
-__all__ = [
-    "ALGORITHMS",
-    "ARRAY_FILTERS",
-    "GBUFFER_FILTERS",
-    "raise_pipeline_errors",
-    "vtkGBufferCapture",
-    *sorted(c.__name__ for c in _CLASSES.values()),
-]
-
-
-def _class_table() -> str:
-    rows = [("vtkGBufferCapture", ":func:`sciviz_gbuf.capture`", "(source)")]
-    for name, f in FILTERS.items():
-        where = "G-buffer" if f.takes == "gbuffer" else f"``{f.default_input}``"
-        if f.takes == "array" and f.default_input is None:
-            where = "active scalars"
-        rows.append((_CLASSES[name].__name__, f":func:`~sciviz_gbuf.filters.{name}`", where))
-    widths = [max(len(r[i]) for r in rows) for i in range(3)]
-    rule = "  ".join("=" * w for w in widths)
-    head = ("class", "wraps", "default input array")
-    lines = [rule, "  ".join(h.ljust(w) for h, w in zip(head, widths, strict=True)).rstrip(), rule]
-    lines += ["  ".join(c.ljust(w) for c, w in zip(r, widths, strict=True)).rstrip() for r in rows]
-    return "\n".join([*lines, rule])
-
-
-if __doc__:  # None under python -OO
-    __doc__ += "\nGenerated class table\n---------------------\n\n" + _class_table() + "\n"
