@@ -114,55 +114,33 @@ def topographic_map(
     """
     colour = _validate.rgb(contour_color, "contour_color")
     d = as_dem(dem)
+    # The map's options, the same for the in-memory and the chunked map.
+    options = {
+        "interval": interval,
+        "major_interval": major_interval,
+        "contours": contours,
+        "width": width,
+        "major_width": major_width,
+        "dense_spacing": dense_spacing,
+        "bands": bands,
+        "cmap": cmap,
+        "sea_level": sea_level,
+        "vmin": vmin,
+        "vmax": vmax,
+        "relief": relief,
+        "azimuth": azimuth,
+        "altitude": altitude,
+        "z_factor": z_factor,
+        "variant": variant,
+        "shadows": shadows,
+        "sky_view": sky_view,
+    }
     if _dask.is_dask(d.heights):
-        return lazy_topographic_map(
-            d,
-            colour,
-            interval=interval,
-            major_interval=major_interval,
-            contours=contours,
-            width=width,
-            major_width=major_width,
-            dense_spacing=dense_spacing,
-            bands=bands,
-            cmap=cmap,
-            sea_level=sea_level,
-            vmin=vmin,
-            vmax=vmax,
-            relief=relief,
-            azimuth=azimuth,
-            altitude=altitude,
-            z_factor=z_factor,
-            variant=variant,
-            shadows=shadows,
-            sky_view=sky_view,
-        )
+        return lazy_topographic_map(d, colour, **options)
     with progress(progress_bar, 4, "topographic map") as bar:
         bar.step("contours")
-        layers = map_layers(
-            d.heights,
-            dx=d.pixel_size[0],
-            dy=d.pixel_size[1],
-            interval=interval,
-            major_interval=major_interval,
-            contours=contours,
-            width=width,
-            major_width=major_width,
-            dense_spacing=dense_spacing,
-            bands=bands,
-            cmap=cmap,
-            sea_level=sea_level,
-            relief=relief,
-            azimuth=azimuth,
-            altitude=altitude,
-            z_factor=z_factor,
-            variant=variant,
-            shadows=shadows,
-            sky_view=sky_view,
-            vmin=vmin,
-            vmax=vmax,
-            bar=bar,
-        )
+        dx, dy = d.pixel_size
+        layers = map_layers(d.heights, dx=dx, dy=dy, **options, bar=bar)
         bar.step("composite")
         out = composite(layers, d.heights, colour)
         bar.step("done")
