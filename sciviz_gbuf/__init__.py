@@ -10,7 +10,7 @@ from __future__ import annotations
 from .core.camera import CameraInfo
 from .core.capture import capture
 from .core.gbuffer import GBuffer
-from .errors import InputError, RenderError, SciVizGBufError
+from .errors import InputError, OutputError, RenderError, SciVizGBufError
 from .recipes.birdseye import birdseye_map, sumi_e
 from .recipes.medical import ct_enhance
 from .recipes.surface import surface_analysis
@@ -23,6 +23,7 @@ __all__ = [
     "CameraInfo",
     "GBuffer",
     "InputError",
+    "OutputError",
     "RenderError",
     "SciVizGBufError",
     "__version__",

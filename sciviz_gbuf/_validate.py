@@ -14,6 +14,8 @@ import numpy as np
 from .errors import InputError
 
 __all__ = [
+    "LIMITS",
+    "at_most",
     "boolean",
     "colormap",
     "finite",
@@ -25,6 +27,28 @@ __all__ = [
     "rgb",
     "unit_interval",
 ]
+
+
+#: Upper bounds of the size-like parameters, one table for the Python API, the command line and
+#: the explorer (documented in the README's "Limits"). Each is refused with an InputError
+#: before any allocation.
+LIMITS: dict[str, float] = {
+    "line_width": 64.0,  # px: edge, contour, hatch and profile line widths
+    "levels": 100_000,  # contour / band / isophote levels in one call
+    "bands": 4096,  # colour band count
+    "directions": 360,  # sky-view horizon directions
+    "image_side": 16384,  # px: one side of a capture or an output image
+    "supersample": 8,  # capture supersampling factor
+    "image_pixels": 2**28,  # width x height x supersample^2 of one capture
+}
+
+
+def at_most(value: float, name: str, limit: str) -> float:
+    """``value`` itself if it is at most ``LIMITS[limit]``, else an InputError naming it."""
+    bound = LIMITS[limit]
+    if not value <= bound:
+        raise InputError(f"{name}: expected at most {bound:g}, got {value!r}")
+    return value
 
 
 def finite(value: object, name: str) -> float:

@@ -6,7 +6,7 @@ so callers can catch the whole family with one ``except``.
 
 from __future__ import annotations
 
-__all__ = ["InputError", "RenderError", "SciVizGBufError"]
+__all__ = ["InputError", "OutputError", "RenderError", "SciVizGBufError"]
 
 
 class SciVizGBufError(Exception):
@@ -19,3 +19,8 @@ class InputError(SciVizGBufError, ValueError):
 
 class RenderError(SciVizGBufError, RuntimeError):
     """The offscreen renderer could not be created or produced no image."""
+
+
+class OutputError(SciVizGBufError, OSError):
+    """An output could not be written completely (disk full, no permission, interrupted): the
+    message names the file; nothing is left behind under its name."""
