@@ -17,6 +17,7 @@ import numpy as np
 from ..errors import InputError
 
 __all__ = [
+    "MAX_CELLS",
     "RawDEM",
     "blank_nodata",
     "crs_is_geographic",
@@ -61,6 +62,11 @@ def blank_nodata(values: np.ndarray, nodata: float | None, *, owned: bool = Fals
         # Compared in the source type: a float32 cast could merge nodata with a close height.
         np.putmask(heights, values == nodata, np.float32(np.nan))
     return heights
+
+
+def _one_line(exc: BaseException) -> str:
+    """A library's error text on one line (GDAL and PyVista messages span several)."""
+    return " ".join(str(exc).split())
 
 
 def crs_is_geographic(crs: str | None) -> bool | None:
@@ -115,6 +121,14 @@ def read_asc(path: Path) -> RawDEM:
             f"{path}: not an ESRI ASCII grid: expected a header with ncols, nrows, "
             f"xllcorner|xllcenter, yllcorner|yllcenter, cellsize|dx+dy ({exc!r})"
         ) from exc
+    if ncols < 1 or nrows < 1:
+        raise InputError(f"{path}: ncols, nrows: expected positive counts, got {ncols}, {nrows}")
+    if not (np.isfinite([dx, dy, x0, y0]).all() and dx > 0 and dy > 0):
+        raise InputError(
+            f"{path}: cellsize: expected a finite cell size > 0 and a finite corner, got "
+            f"dx={dx:g}, dy={dy:g}, corner ({x0:g}, {y0:g})"
+        )
+    _check_cells(path, (nrows, ncols), "its header declares shape")
     try:
         values = np.array(words[i:], dtype=np.float64)
     except ValueError as exc:
@@ -148,21 +162,112 @@ def read_hgt(path: Path) -> RawDEM:
         )
     lat = int(m[2]) * (1 if m[1].upper() == "N" else -1)
     lon = int(m[4]) * (1 if m[3].upper() == "E" else -1)
+    if not (-90 <= lat <= 89 and -180 <= lon <= 179):
+        raise InputError(
+            f"{path}: tile name {m[0]!r}: expected the south-west corner of a 1-degree tile, "
+            "latitude N89..S90, longitude W180..E179"
+        )
     values = np.fromfile(path, dtype=">i2").reshape(n, n)
     d = 1.0 / (n - 1)  # edge samples are centred on whole degrees: half a pixel outside
     transform = (lon - d / 2, d, 0.0, lat + 1 + d / 2, 0.0, -d)
     return RawDEM(blank_nodata(values, HGT_VOID), transform, "EPSG:4326", True)
 
 
+#: Largest DEM a file may declare, in cells (a 64k x 64k grid is 16 GiB of float32): beyond it the
+#: out-of-core reader (``read_dem(chunks=)``) is the way, and a lying header is refused before
+#: anything is allocated.
+MAX_CELLS = 2**32
+
+
+def _check_cells(who: object, shape: tuple[int, ...], what: str) -> None:
+    """A declared array shape: 2-D, positive, not absurdly large (before any allocation)."""
+    if len(shape) != 2 or min(shape, default=0) < 1:
+        raise InputError(f"{who}: expected a non-empty 2-D array of heights, {what} {shape}")
+    if shape[0] * shape[1] > MAX_CELLS:
+        raise InputError(
+            f"{who}: {what} {shape} ({shape[0] * shape[1]:.3g} cells) is larger than the "
+            f"{MAX_CELLS:.3g} cells read into memory: use read_dem(..., chunks=) or a GeoTIFF"
+        )
+
+
+def _npy_header(
+    f, path: Path, where: str = "", *, grid: bool = True
+) -> tuple[tuple[int, ...], np.dtype, int]:
+    """Shape, dtype and data offset of a ``.npy`` stream, checked (nothing else is read):
+    real numeric, at most :data:`MAX_CELLS` values, and 2-D if ``grid``."""
+    fmt = np.lib.format
+    try:
+        version = fmt.read_magic(f)
+        if version == (1, 0):
+            shape, _, dtype = fmt.read_array_header_1_0(f)
+        else:
+            shape, _, dtype = fmt.read_array_header_2_0(f)
+    except (ValueError, EOFError, OSError, SyntaxError) as exc:
+        raise InputError(f"{path}{where}: not a NumPy .npy array ({exc})") from exc
+    if dtype.hasobject or not (
+        np.issubdtype(dtype, np.integer)
+        or np.issubdtype(dtype, np.floating)
+        or np.issubdtype(dtype, np.bool_)
+    ):
+        raise InputError(f"{path}{where}: expected real numeric heights, got dtype {dtype}")
+    shape = tuple(shape)
+    if grid:
+        _check_cells(f"{path}{where}", shape, "its header declares shape")
+    elif int(np.prod(shape, dtype=np.float64)) > MAX_CELLS:
+        raise InputError(f"{path}{where}: its header declares {shape}: too large to read")
+    return shape, dtype, f.tell()
+
+
 def read_npy(path: Path) -> RawDEM:
-    """A ``.npy`` file holding one 2-D array of heights (no georeference; pickles refused)."""
-    return RawDEM(np.load(path, allow_pickle=False))
+    """A ``.npy`` file holding one 2-D array of heights (no georeference; pickles refused).
+
+    The header is checked first (2-D, real numeric dtype, a size the file can hold), so a
+    truncated or lying file is an InputError, not a MemoryError or a partial read."""
+    with open(path, "rb") as f:
+        shape, dtype, offset = _npy_header(f, path)
+    need = offset + int(np.prod(shape)) * dtype.itemsize
+    size = path.stat().st_size
+    if size < need:
+        raise InputError(
+            f"{path}: truncated .npy: its header declares {shape} {dtype} ({need} bytes), "
+            f"the file has {size}"
+        )
+    try:
+        return RawDEM(np.load(path, allow_pickle=False))
+    except (ValueError, EOFError, OSError) as exc:
+        raise InputError(f"{path}: cannot read as a NumPy .npy array ({exc})") from exc
+
+
+def _scalar(value: np.ndarray, path: Path, key: str) -> float:
+    v = np.asarray(value)
+    try:
+        x = float(v) if v.ndim == 0 or v.size == 1 else float("nan")
+    except (TypeError, ValueError):
+        x = float("nan")
+    if not np.isfinite(x):
+        raise InputError(f"{path}: {key}: expected a finite number, got {value!r:.60}")
+    return x
 
 
 def read_npz(path: Path) -> RawDEM:
-    """``.npz`` like Matplotlib's ``jacksboro_fault_dem.npz``, or holding one 2-D array."""
-    with np.load(path, allow_pickle=False) as data:
-        arrays = {k: np.asarray(data[k]) for k in data.files}
+    """``.npz`` like Matplotlib's ``jacksboro_fault_dem.npz``, or holding one 2-D array.
+
+    Every member's ``.npy`` header is checked before it is decompressed; a damaged archive
+    (not a zip, a CRC or deflate error, a truncated member) is an InputError naming the file."""
+    import zipfile
+    import zlib
+
+    try:
+        with zipfile.ZipFile(path) as zf:
+            for info in zf.infolist():
+                with zf.open(info) as f:
+                    _npy_header(f, path, f": member {info.filename!r}", grid=False)
+        with np.load(path, allow_pickle=False) as data:
+            arrays = {k: np.asarray(data[k]) for k in data.files}
+    except InputError:
+        raise
+    except (zipfile.BadZipFile, zlib.error, ValueError, EOFError, OSError, KeyError) as exc:
+        raise InputError(f"{path}: not a readable NumPy .npz archive ({exc})") from exc
     if "elevation" not in arrays:
         grids = [a for a in arrays.values() if a.ndim == 2]
         if len(grids) != 1:
@@ -175,7 +280,9 @@ def read_npz(path: Path) -> RawDEM:
     keys = ("dx", "dy", "xmin", "xmax", "ymin", "ymax")
     if not all(k in arrays for k in keys):
         return RawDEM(elev)
-    dx, dy, xmin, xmax, ymin, ymax = (float(arrays[k]) for k in keys)
+    dx, dy, xmin, xmax, ymin, ymax = (_scalar(arrays[k], path, k) for k in keys)
+    if dx == 0 or dy == 0:
+        raise InputError(f"{path}: dx, dy: expected non-zero cell sizes, got {dx}, {dy}")
     # Rows run north to south; the bounds are pixel edges. Matplotlib's sample stores the north
     # edge as ``ymin`` (ymin > ymax), so take the larger value as north whichever key holds it.
     west, north = min(xmin, xmax), max(ymin, ymax)
@@ -185,6 +292,9 @@ def read_npz(path: Path) -> RawDEM:
 def raster_georeference(src, path: Path) -> tuple[str | None, bool | None, tuple | None]:
     """``(crs, geographic, GDAL transform or None)`` of an open rasterio dataset that holds a
     DEM; InputError for an RGB(A) image (three or more uint8 bands)."""
+    dtype = np.dtype(src.dtypes[0])
+    if not np.issubdtype(dtype, np.number) or np.issubdtype(dtype, np.complexfloating):
+        raise InputError(f"{path}: expected real numeric heights, got a {dtype} band")
     if src.count >= 3 and all(t == "uint8" for t in src.dtypes):
         raise InputError(
             f"{path}: {src.count} uint8 bands look like an RGB(A) image, not a DEM: "
@@ -210,10 +320,15 @@ def read_geotiff(path: Path) -> RawDEM:
             warnings.simplefilter("ignore", NotGeoreferencedWarning)
             with rasterio.open(path) as src:
                 crs, geographic, transform = raster_georeference(src, path)
+                _check_cells(path, tuple(src.shape), "it holds a raster of shape")
                 values = src.read(1)
                 nodata = src.nodata
     except rasterio.errors.RasterioError as exc:
-        raise InputError(f"{path}: cannot read as a GeoTIFF ({exc})") from exc
+        raise InputError(f"{path}: cannot read as a GeoTIFF ({_one_line(exc)})") from exc
+    except UnicodeError as exc:  # GDAL takes UTF-8 file names only
+        raise InputError(
+            f"{path}: GDAL cannot open a file whose name is not UTF-8: rename it"
+        ) from exc
     if transform is None:
         warnings.warn(
             f"{path}: TIFF without georeference: pixels taken as spacing= metres (default 1 m)",

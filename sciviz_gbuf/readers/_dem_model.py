@@ -245,7 +245,13 @@ def read_dataarray(da: Any, name: str, *, lazy: bool = False) -> tuple[RawDEM, f
     nodata = None
     for where, key in ((da.attrs, "_FillValue"), (da.attrs, "nodata"), (da.encoding, "_FillValue")):
         if where.get(key) is not None:
-            nodata = float(where[key])
+            try:
+                nodata = float(where[key])
+            except (TypeError, ValueError):
+                raise InputError(
+                    f"{name}: attribute {key}: expected a number (the nodata value), "
+                    f"got {where[key]!r:.60}"
+                ) from None
             break
     return RawDEM(values, transform, crs, geographic), nodata
 
@@ -262,6 +268,14 @@ def clean_heights(
         )
     if not (np.issubdtype(values.dtype, np.number) and not np.iscomplexobj(values)):
         raise InputError(f"{what}: expected real numeric heights, got dtype {values.dtype}")
+    if values.dtype.itemsize > 4 and np.issubdtype(values.dtype, np.floating):
+        # float64 heights beyond float32 would silently become inf, then nodata: an empty map.
+        big = np.abs(values[np.isfinite(values)], dtype=np.float64)
+        if big.size and big.max() > np.finfo(np.float32).max:
+            raise InputError(
+                f"{what}: heights up to {big.max():.3g} are beyond float32 "
+                f"(+-{np.finfo(np.float32).max:.3g}): expected heights in metres"
+            )
     heights = values if owned and values.dtype == np.float32 else values.astype(np.float32)
     if nodata is not None:
         np.putmask(heights, values == nodata, np.float32(np.nan))
@@ -335,6 +349,13 @@ def georeference(
     _, dx, rx, y0, ry, dy = transform
     if geo:
         h, w = shape
+        lats = [y0 + c * ry + r * dy for c in (0, w) for r in (0, h)]
+        if min(lats) < -90.0 - 1e-6 or max(lats) > 90.0 + 1e-6:
+            raise InputError(
+                f"{name or 'array'}: a geographic grid must lie within latitudes -90..90, "
+                f"this one spans {min(lats):.6g}..{max(lats):.6g} (wrong transform, or not "
+                "in degrees: pass geographic=False)"
+            )
         m_lon, m_lat = metres_per_degree(y0 + ry * w / 2 + dy * h / 2)
         pixel = (float(np.hypot(dx * m_lon, ry * m_lat)), float(np.hypot(rx * m_lon, dy * m_lat)))
     else:

@@ -169,7 +169,13 @@ def _file_meta(path: Path) -> _FileMeta:
                     str(path), src.shape, transform, crs, geographic, src.nodata, stamp
                 )
     except rasterio.errors.RasterioError as exc:
-        raise InputError(f"{path}: rasterio cannot read this DEM file ({exc})") from exc
+        raise InputError(
+            f"{path}: rasterio cannot read this DEM file ({' '.join(str(exc).split())})"
+        ) from exc
+    except UnicodeError as exc:  # GDAL takes UTF-8 file names only
+        raise InputError(
+            f"{path}: GDAL cannot open a file whose name is not UTF-8: rename it"
+        ) from exc
     if not np.issubdtype(dtype, np.number) or np.issubdtype(dtype, np.complexfloating):
         raise InputError(f"{path}: expected real numeric heights, got dtype {dtype}")
     if meta.transform is not None:

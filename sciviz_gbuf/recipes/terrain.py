@@ -19,6 +19,7 @@ import numpy as np
 
 from .. import _dask, _validate
 from .._progress import progress
+from ..errors import InputError
 from ..readers import DEM
 from ._intervals import contour_intervals, nice_intervals, typical_slope
 from ._map import CONTOUR_COLOR, as_dem, composite, map_layers
@@ -114,6 +115,9 @@ def topographic_map(
     """
     colour = _validate.rgb(contour_color, "contour_color")
     d = as_dem(dem)
+    if not _dask.is_dask(d.mask) and not d.mask.any():
+        # A fully transparent picture would look like success.
+        raise InputError(f"{d.source or 'heights'}: every cell is nodata: nothing to map")
     # The map's options, the same for the in-memory and the chunked map.
     options = {
         "interval": interval,

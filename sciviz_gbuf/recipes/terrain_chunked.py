@@ -32,7 +32,7 @@ __all__ = ["RELIEF_HALO", "lazy_topographic_map"]
 RELIEF_HALO = HILLSHADE_RADIUS + FILL_RING_RADIUS
 
 
-def _statistics(z, interval, major_interval, vmin, vmax):
+def _statistics(z, interval, major_interval, vmin, vmax, name: str = "heights"):
     """Height range and contour intervals, from one reduction pass when they are not given."""
     import dask.array as da
 
@@ -46,6 +46,8 @@ def _statistics(z, interval, major_interval, vmin, vmax):
             da.nanmin(z), da.nanmax(z), *(lattice if lattice is not None else ())
         )
         lo, hi = float(lo), float(hi)
+        if not np.isfinite(lo):
+            raise InputError(f"{name}: every cell is nodata: nothing to map")
         if need_slope:
             slope = median_slope(*cells) if cells else float("nan")
     lo, hi, interval, major_interval = choose_intervals(lo, hi, slope, interval, major_interval)
@@ -92,7 +94,9 @@ def lazy_topographic_map(
         )
     z = d.heights
     dx, dy = d.pixel_size
-    lo, hi, interval, major_interval = _statistics(z, interval, major_interval, vmin, vmax)
+    lo, hi, interval, major_interval = _statistics(
+        z, interval, major_interval, vmin, vmax, d.source or "heights"
+    )
     tables = map_band_tables(
         bands, interval, major_interval, cmap, lo if vmin is None else vmin,
         hi if vmax is None else vmax, sea_level,
