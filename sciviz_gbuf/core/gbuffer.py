@@ -8,11 +8,15 @@ from __future__ import annotations
 
 import json
 import os
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
+from tokenize import TokenError
+from zipfile import BadZipFile
 
 import numpy as np
 
+from .._validate import LIMITS
 from ..errors import InputError
 from ._block_mean_kernels import block_mean
 from .camera import CameraInfo
@@ -161,12 +165,29 @@ class GBuffer:
             if int(meta["version"]) > FORMAT_VERSION:
                 raise ValueError(f"format version {meta['version']} is newer than this package")
             camera = CameraInfo.from_json(json.dumps(meta["camera"]))
-        except (ValueError, KeyError, TypeError) as exc:
+            supersample = meta.get("supersample", 1)
+            if isinstance(supersample, bool) or not isinstance(supersample, int):
+                raise ValueError(f"supersample: expected an integer, got {supersample!r}")
+        except (ValueError, KeyError, TypeError, AttributeError) as exc:
             raise InputError(f"{path}: not a valid G-buffer file ({exc})") from exc
+        _check_camera(camera, path)
+        if not 1 <= supersample <= LIMITS["supersample"]:
+            raise InputError(
+                f"{path}: supersample: expected 1 to {LIMITS['supersample']:g}, got {supersample}"
+            )
         missing = [name for name, _, _ in _CHANNELS if name not in arrays]
         if missing:
             raise InputError(f"{path}: G-buffer file lacks channel(s) {missing}")
+        if np.ndim(arrays["depth"]) != 2:
+            raise InputError(f"{path}: channel 'depth' has shape {np.shape(arrays['depth'])}")
         h, w = arrays["depth"].shape[:2]
+        cw, ch = camera.window_size
+        # The camera records the window as rendered: supersample times the output size.
+        if (h, w) != (ch, cw) or h % supersample or w % supersample:
+            raise InputError(
+                f"{path}: channels of {w}x{h} pixels do not match the camera's {cw}x{ch} "
+                f"window, or are not a multiple of supersample {supersample}"
+            )
         kw: dict[str, np.ndarray] = {}
         for name, dtype, trailing in _CHANNELS:
             a = np.asarray(arrays[name])
@@ -186,7 +207,7 @@ class GBuffer:
             camera=camera,
             uv=uv,
             scalars=scalars,
-            supersample=int(meta.get("supersample", 1)),
+            supersample=supersample,
             object_names=list(meta.get("object_names", [])),
             **kw,
         )
@@ -219,8 +240,22 @@ class GBuffer:
             try:
                 with np.load(p, allow_pickle=False) as z:
                     arrays = {k: z[k] for k in z.files}
-            except (OSError, ValueError) as exc:
-                raise InputError(f"{p}: cannot read as .npz ({exc})") from exc
+            # (numpy's header parser raises TokenError on damaged bytes)
+            except (
+                OSError,
+                ValueError,
+                EOFError,
+                KeyError,
+                BadZipFile,
+                zlib.error,
+                TokenError,
+            ) as exc:
+                why = " ".join(str(exc).split())
+                raise InputError(f"{p}: cannot read as .npz ({why})") from exc
+            except MemoryError as exc:  # a lying array header
+                raise InputError(
+                    f"{p}: an array in it declares more data than fits in memory"
+                ) from exc
             if META_KEY not in arrays:
                 raise InputError(f"{p}: not a sciviz_gbuf G-buffer (no {META_KEY!r} record)")
             return cls._from_arrays(arrays, str(arrays.pop(META_KEY)), str(p))
@@ -265,6 +300,39 @@ class GBuffer:
             arrays[name] = a.reshape(h, w, *a.shape[1:])[::-1]
         meta = image.field_data[META_KEY]
         return cls._from_arrays(arrays, str(meta[0]), source)
+
+
+def _check_camera(cam: CameraInfo, path: str) -> None:
+    """A loaded camera record that every filter can trust: finite, a real view, a window."""
+    numbers = [
+        *cam.position,
+        *cam.focal_point,
+        *cam.view_up,
+        cam.view_angle,
+        cam.parallel_scale,
+        *cam.clipping_range,
+        *cam.view_matrix,
+        *cam.projection_matrix,
+    ]
+    lengths = (len(cam.position), len(cam.focal_point), len(cam.view_up), len(cam.clipping_range))
+    if lengths != (3, 3, 3, 2) or len(cam.view_matrix) != 16 or len(cam.projection_matrix) != 16:
+        raise InputError(
+            f"{path}: camera record: expected 3-vectors, a clipping range, 4x4 matrices"
+        )
+    if not np.isfinite(np.asarray(numbers, dtype=np.float64)).all():
+        raise InputError(f"{path}: camera record holds NaN or infinite values")
+    near, far = cam.clipping_range
+    w, h = cam.window_size
+    side = LIMITS["image_side"]
+    if not (0 < near < far) or not (0 < cam.view_angle < 180) or cam.parallel_scale <= 0:
+        raise InputError(
+            f"{path}: camera record: expected 0 < near < far, a view angle in (0, 180) and a "
+            f"parallel scale > 0, got {cam.clipping_range}, {cam.view_angle}, {cam.parallel_scale}"
+        )
+    if not (1 <= w <= side and 1 <= h <= side):
+        raise InputError(f"{path}: camera record: window size {w}x{h} is not 1..{side:g} a side")
+    if np.linalg.norm(np.subtract(cam.focal_point, cam.position)) == 0:
+        raise InputError(f"{path}: camera record: the eye is at its focal point")
 
 
 def check_gbuffer(gb: object) -> GBuffer:

@@ -202,8 +202,9 @@ def _npy_header(
             shape, _, dtype = fmt.read_array_header_1_0(f)
         else:
             shape, _, dtype = fmt.read_array_header_2_0(f)
-    except (ValueError, EOFError, OSError, SyntaxError) as exc:
-        raise InputError(f"{path}{where}: not a NumPy .npy array ({exc})") from exc
+    except Exception as exc:  # numpy's header parser raises many types on damaged bytes
+        why = " ".join(str(exc).split()) or type(exc).__name__
+        raise InputError(f"{path}{where}: not a NumPy .npy array ({why})") from exc
     if dtype.hasobject or not (
         np.issubdtype(dtype, np.integer)
         or np.issubdtype(dtype, np.floating)
