@@ -128,6 +128,13 @@ def isosurface(
         raise InputError(
             f"volume: expected a PyVista dataset (e.g. read_dicom_series), got {type(volume)!r}"
         )
+    dims = getattr(volume, "dimensions", None)
+    if dims is not None and min(dims) < 2:
+        # One slice is an image, not a volume: marching cubes finds no surface in it.
+        raise InputError(
+            f"volume: a surface needs at least 2 samples along each axis, got dimensions "
+            f"{tuple(dims)} (a single slice? read the whole series)"
+        )
     name, values = _scalars_of(volume, scalars)
     level = _iso_value(iso, name)
     if isinstance(smooth, bool) or not isinstance(smooth, (int, np.integer)) or smooth < 0:

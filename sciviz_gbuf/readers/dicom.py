@@ -615,13 +615,17 @@ def _read_volume(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     """(N, rows, cols) float64 rescaled values, NaN at padding; slopes, intercepts, #padded."""
     rows, cols = slices[0].rows, slices[0].cols
+    # The first slice is decoded before the volume is allocated: Rows/Columns that lie about
+    # the pixel data (Rows=65535 over 512x512 data) fail here, not as a 56 GiB allocation.
+    first = _read_slice(slices[0])
+    _check_volume_memory(len(slices), rows, cols, slices[0])
     volume = np.empty((len(slices), rows, cols), dtype=np.float64)
     slopes = np.empty(len(slices))
     intercepts = np.empty(len(slices))
     n_padding = 0
     with progress(progress_bar, len(slices), "DICOM pixels") as bar:
         for k, h in enumerate(slices):
-            raw, slope, intercept, pad = _read_slice(h)
+            raw, slope, intercept, pad = first if k == 0 else _read_slice(h)
             volume[k] = raw * slope + intercept
             if pad is not None:
                 volume[k][pad] = np.nan
@@ -629,6 +633,57 @@ def _read_volume(
             slopes[k], intercepts[k] = slope, intercept
             bar.step(h.path.name)
     return volume, slopes, intercepts, n_padding
+
+
+def _available_memory() -> int | None:
+    """Bytes of memory available to a new allocation (Linux's MemAvailable), if known."""
+    try:
+        with open("/proc/meminfo", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):
+        return None
+
+
+def _check_volume_memory(n: int, rows: int, cols: int, h: _Header) -> None:
+    """The float64 volume (and its float32 copy) must fit in the memory available now."""
+    need = n * rows * cols * (8 + 4)
+    have = _available_memory()
+    if have is not None and need > have:
+        raise DicomSeriesError(
+            f"{h.name}: {n} slices of {rows}x{cols} need {need / 2**30:.1f} GiB, only "
+            f"{have / 2**30:.1f} GiB of memory is available (read fewer slices or a series "
+            "with fewer rows/columns)"
+        )
+
+
+#: JPEG 2000 codestream markers: start of codestream, end of codestream.
+_J2K_SOC, _J2K_EOC = b"\xff\x4f", b"\xff\xd9"
+
+
+def _check_j2k_frames(ds: Any, h: _Header) -> None:
+    """A JPEG 2000 frame must be a whole codestream (SOC ... EOC): openjpeg decodes a damaged
+    or truncated one into plausible-looking garbage without an error."""
+    from pydicom.encaps import generate_frames
+
+    try:
+        n = int(ds.get("NumberOfFrames", 1) or 1)
+        for frame in generate_frames(ds.PixelData, number_of_frames=n):
+            start = frame.find(_J2K_SOC)
+            if start < 0 or start > 64 or not frame.rstrip(b"\x00").endswith(_J2K_EOC):
+                raise DicomSeriesError(
+                    f"{h.name}: JPEG 2000 pixel data is damaged or truncated (the codestream "
+                    "does not run from its start to its end marker)"
+                )
+    except DicomSeriesError:
+        raise
+    except Exception as exc:  # pydicom's encapsulation parser on damaged items
+        raise DicomSeriesError(f"{h.name}: encapsulated pixel data is damaged: {exc}") from exc
 
 
 def _read_slice(h: _Header) -> tuple[np.ndarray, float, float, np.ndarray | None]:
@@ -652,6 +707,8 @@ def _read_slice(h: _Header) -> tuple[np.ndarray, float, float, np.ndarray | None
             raise DicomDecoderError(_missing_decoder_message(h, ts_name))
         if not ts.is_encapsulated:
             _check_native_length(ds, h)
+        elif "JPEG 2000" in ts.name:
+            _check_j2k_frames(ds, h)
     try:
         raw = _pixel_array(ds)
     except RuntimeError as exc:
