@@ -501,7 +501,12 @@ def _vtk_dem_values(path: Path, nrows: int, ncols: int) -> np.ndarray:
 
     reader.AddObserver(vtkCommand.ErrorEvent, on_error)
     reader.GetExecutive().AddObserver(vtkCommand.ErrorEvent, on_error)
-    reader.SetFileName(str(path))
+    try:
+        reader.SetFileName(str(path))
+    except UnicodeError as exc:  # VTK takes UTF-8 file names only
+        raise InputError(
+            f"{path}: VTK cannot open a file whose name is not UTF-8: rename it"
+        ) from exc
     reader.Update()
     image = reader.GetOutput()
     scalars = image.GetPointData().GetScalars()
