@@ -13,6 +13,7 @@ import base64
 import dataclasses
 import io
 import math
+import numbers
 import os
 import time
 from collections.abc import Mapping, Sequence
@@ -22,6 +23,7 @@ from pathlib import Path
 import numpy as np
 import pyvista as pv
 
+from .._validate import LIMITS, at_most, number_in
 from ..compose import to_uint8
 from ..core.capture import capture
 from ..core.gbuffer import GBuffer
@@ -36,7 +38,9 @@ from ..styles.fused import fused_style, rgba_on_paper
 from ..styles.illustration import fig7_edge_map, illustrate
 
 __all__ = [
+    "CAMERA_BOUNDS",
     "DEM_SUFFIXES",
+    "PARAM_BOUNDS",
     "RELIEF_VARIANTS",
     "STYLES",
     "VIEWS",
@@ -56,6 +60,57 @@ _CONTOUR_COLOR = np.array([0.45, 0.22, 0.05], dtype=np.float32)
 VIEWS = ("map", "3d")
 #: Relief shades of the map (:func:`~sciviz_gbuf.filters.hillshade` variants).
 RELIEF_VARIANTS = ("regular", "multidirectional", "combined", "igor")
+
+_F32_MAX = float(np.finfo(np.float32).max)
+_LINE = float(LIMITS["line_width"])
+#: Bounds of the numeric :class:`Params`: name -> ``(low, high, low_excluded, integer)``.
+#: Line widths and band counts are those of the Python API (:data:`~sciviz_gbuf._validate.LIMITS`);
+#: the map's majors are drawn twice as wide as ``map_width``, so it gets half the width limit;
+#: intervals are float32 numbers like the G-buffer's heights (their level counts are checked
+#: against the height range in :meth:`Explorer.render_image`).
+PARAM_BOUNDS: dict[str, tuple[float, float, bool, bool]] = {
+    "crease_angle": (0.0, 180.0, True, False),
+    "depth_jump": (0.0, 1e4, True, False),
+    "width": (1.0, _LINE, False, False),
+    "contour_interval": (0.0, _F32_MAX, False, False),
+    "contour_width": (0.0, _LINE, True, False),
+    "bands": (0, LIMITS["bands"], False, True),
+    "light_azimuth": (-360.0, 360.0, False, False),
+    "light_elevation": (-90.0, 90.0, False, False),
+    "map_azimuth": (-360.0, 360.0, False, False),
+    "map_altitude": (0.0, 90.0, False, False),
+    "z_factor": (0.0, 1e4, True, False),
+    "map_interval": (0.0, _F32_MAX, False, False),
+    "major_every": (1, LIMITS["levels"], False, True),
+    "map_width": (0.0, _LINE / 2, True, False),
+    "map_bands": (0, LIMITS["bands"], False, True),
+}
+
+
+def _short(value: object, limit: int = 60) -> str:
+    """``repr(value)`` cut to ``limit`` characters: a browser may send megabytes in one value
+    and the message must stay one short line."""
+    text = repr(value).replace("\n", " ")
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def _bounded(
+    value: object, name: str, low: float, high: float, *, strict: bool, integer: bool
+) -> float:
+    """``value`` as a float if it is a real number (an integer if ``integer``) in
+    ``[low, high]`` (``(low, high]`` if ``strict``), else an InputError naming ``name``."""
+    kind = "an integer" if integer else "a number"
+    span = f"{'(' if strict else '['}{low:g}, {high:g}]"
+    typed = isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
+    if not typed or (integer and not isinstance(value, numbers.Integral)):
+        raise InputError(f"{name}: expected {kind} in {span}, got {_short(value)}")
+    try:
+        v = float(value)
+    except OverflowError:  # an int beyond float range is out of every bound
+        v = math.inf
+    if strict and not v > low:
+        raise InputError(f"{name}: expected {kind} in {span}, got {_short(value)}")
+    return number_in(v, name, low, high)
 
 
 @dataclass(frozen=True)
@@ -117,48 +172,21 @@ class Params:
         return (math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el))
 
     def checked(self) -> Params:
-        """These parameters, or an :class:`InputError` naming the first bad one."""
+        """These parameters, or an :class:`InputError` naming the first bad one.
+
+        Every parameter is bounded above as well as below (:data:`PARAM_BOUNDS`; the line
+        widths and band counts by :data:`~sciviz_gbuf._validate.LIMITS`, as in the Python
+        API), so no value a browser can send makes one update compute for minutes."""
+        if not isinstance(self.style, str):
+            raise InputError(f"style: expected a style name, got {_short(self.style)}")
         check_style(self.style, "explore")
-        for name, low, strict in (
-            ("crease_angle", 0.0, True),
-            ("depth_jump", 0.0, True),
-            ("width", 1.0, False),
-            ("contour_interval", 0.0, False),
-            ("contour_width", 0.0, True),
-            ("light_azimuth", -math.inf, False),
-            ("light_elevation", -90.0, False),
-            ("map_azimuth", -math.inf, False),
-            ("map_altitude", 0.0, False),
-            ("z_factor", 0.0, True),
-            ("map_interval", 0.0, False),
-            ("map_width", 0.0, True),
-        ):
-            v = getattr(self, name)
-            ok = (
-                isinstance(v, (int, float))
-                and math.isfinite(v)
-                and (v > low if strict else v >= low)
-            )
-            if not ok:
-                op = ">" if strict else ">="
-                raise InputError(f"{name}: expected a finite number {op} {low}, got {v!r}")
-        if not -90.0 <= self.light_elevation <= 90.0:
+        for name, (low, high, strict, integer) in PARAM_BOUNDS.items():
+            _bounded(getattr(self, name), name, low, high, strict=strict, integer=integer)
+        if not isinstance(self.view, str) or self.view not in VIEWS:
+            raise InputError(f"view: expected one of {list(VIEWS)}, got {_short(self.view)}")
+        if not isinstance(self.relief, str) or self.relief not in RELIEF_VARIANTS:
             raise InputError(
-                f"light_elevation: expected degrees in [-90, 90], got {self.light_elevation!r}"
-            )
-        if not self.map_altitude <= 90.0:
-            raise InputError(
-                f"map_altitude: expected degrees in [0, 90], got {self.map_altitude!r}"
-            )
-        for name, low in (("bands", 0), ("major_every", 1), ("map_bands", 0)):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not (isinstance(v, int) and v >= low):
-                raise InputError(f"{name}: expected an integer >= {low}, got {v!r}")
-        if self.view not in VIEWS:
-            raise InputError(f"view: expected one of {list(VIEWS)}, got {self.view!r}")
-        if self.relief not in RELIEF_VARIANTS:
-            raise InputError(
-                f"relief: expected one of {list(RELIEF_VARIANTS)}, got {self.relief!r}"
+                f"relief: expected one of {list(RELIEF_VARIANTS)}, got {_short(self.relief)}"
             )
         return self
 
@@ -186,6 +214,14 @@ class Params:
             "z_factor": float(self.z_factor),
             "variant": self.relief,
         }
+
+
+#: Bounds of the orbit camera: name -> ``(low, high, low_excluded)`` (degrees, zoom factor).
+CAMERA_BOUNDS: dict[str, tuple[float, float, bool]] = {
+    "azimuth": (-360.0, 360.0, False),
+    "elevation": (-90.0, 90.0, False),
+    "zoom": (0.01, 100.0, False),
+}
 
 
 @dataclass
@@ -281,6 +317,8 @@ class Explorer:
         w, h = (int(v) for v in self.window_size)
         if w < 16 or h < 16:
             raise InputError(f"--size: expected at least 16x16 pixels, got {w}x{h}")
+        at_most(max(w, h), "--size", "image_side")
+        at_most(w * h, "--size (width x height)", "image_pixels")
         self.window_size = (w, h)
         if not isinstance(self.scene, pv.DataSet) or self.scene.n_points == 0:
             raise InputError("scene: expected a non-empty PyVista dataset")
@@ -499,18 +537,13 @@ class Explorer:
         """Move the orbit camera (degrees around z, degrees above the xy plane, zoom factor)
         and capture again."""
         new = replace(self.camera)
-        if azimuth is not None:
-            new.azimuth = float(azimuth)
-        if elevation is not None:
-            if not -90.0 <= float(elevation) <= 90.0:
-                raise InputError(f"elevation: expected degrees in [-90, 90], got {elevation!r}")
-            new.elevation = float(elevation)
-        if zoom is not None:
-            if not (math.isfinite(float(zoom)) and float(zoom) > 0):
-                raise InputError(f"zoom: expected a number > 0, got {zoom!r}")
-            new.zoom = float(zoom)
-        if not all(math.isfinite(v) for v in (new.azimuth, new.elevation, new.zoom)):
-            raise InputError(f"camera: expected finite numbers, got {new!r}")
+        # Bounded like every parameter the browser can set (CAMERA_BOUNDS): an extreme zoom
+        # puts the camera at a distance no float32 depth buffer resolves.
+        for name, value in (("azimuth", azimuth), ("elevation", elevation), ("zoom", zoom)):
+            if value is not None:
+                low, high, strict = CAMERA_BOUNDS[name]
+                v = _bounded(value, name, low, high, strict=strict, integer=False)
+                setattr(new, name, v)
         if new != self.camera:
             self.camera = new
             if self._gbuffer is not None:  # else the 3-D view captures when first shown
@@ -532,6 +565,21 @@ class Explorer:
         }
         return replace(self.params, **conv).checked()
 
+    def _check_levels(self, p: Params) -> None:
+        """Refuse an interval that draws more than ``LIMITS["levels"]`` lines over the height
+        range it is drawn on (the bound of the Python API's ``interval=``)."""
+        if p.view == "map":
+            name, q, (lo, hi) = "map_interval", p.map_interval, self.map_range
+        else:
+            name, q, (lo, hi) = "contour_interval", p.contour_interval, self.height_range
+        if q > 0:
+            n = (hi - lo) / q
+            if not n <= LIMITS["levels"]:
+                raise InputError(
+                    f"{name}: expected an interval drawing at most {LIMITS['levels']:g} lines "
+                    f"over the heights {lo:.6g}..{hi:.6g}, got {q!r} ({n:.3g} lines)"
+                )
+
     def render_image(self, params: Params | Mapping[str, object] | None = None) -> np.ndarray:
         """The picture of the cached G-buffer with these parameters (no capture).
 
@@ -551,6 +599,7 @@ class Explorer:
             p = params.checked()
         else:
             p = self.update_params(params)
+        self._check_levels(p)
         rgb = self._map_image(p) if p.view == "map" else self._layered_image(p)
         self.params = p
         self.last_ms = (time.perf_counter() - t0) * 1e3

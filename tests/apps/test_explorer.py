@@ -3,14 +3,9 @@ headless Chromium sees the picture change within 200 ms of moving a slider."""
 
 from __future__ import annotations
 
-import os
 import shutil
-import signal
 import socket
-import subprocess
-import sys
 import time
-import urllib.request
 from pathlib import Path
 
 import numpy as np
@@ -26,9 +21,7 @@ from sciviz_gbuf.apps.explorer import (
 from sciviz_gbuf.cli import build_parser
 from sciviz_gbuf.datasets import load_nut
 from sciviz_gbuf.errors import InputError
-from tests.helpers.paths import PROJECT_ROOT
-
-ROOT = PROJECT_ROOT
+from tests.apps.explorer_server import free_port, listening_addresses, served_explorer
 
 
 @pytest.fixture(scope="module")
@@ -151,36 +144,15 @@ def test_dem_is_explored_as_a_height_field():
 def test_cli_parses_explore(tmp_path, capsys):
     from sciviz_gbuf.cli import main
 
-    assert main(["explore", str(tmp_path / "nope.stl"), "--port", str(_free_port())]) == 2
+    assert main(["explore", str(tmp_path / "nope.stl"), "--port", str(free_port())]) == 2
     assert "nope.stl" in capsys.readouterr().err
     args = build_parser().parse_args(["explore", "part.stl", "--port", "9001", "--size", "64x48"])
-    assert (args.file, args.port, args.size) == ("part.stl", 9001, (64, 48))
+    # --port is checked by the command (one error line), so it parses as text.
+    assert (args.file, args.port, args.size) == ("part.stl", "9001", (64, 48))
     assert build_parser().parse_args(["explore"]).file is None
 
 
 # -- browser ------------------------------------------------------------------------------
-
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-def _listening_addresses(port: int) -> list[str]:
-    """Local addresses (hex, as the kernel lists them) of sockets listening on ``port``."""
-    out = []
-    for table in ("/proc/net/tcp", "/proc/net/tcp6"):
-        try:
-            lines = Path(table).read_text().splitlines()[1:]
-        except OSError:
-            continue
-        for line in lines:
-            parts = line.split()
-            addr, p = parts[1].rsplit(":", 1)
-            if int(p, 16) == port and parts[3] == "0A":  # 0A: LISTEN
-                out.append(addr)
-    return out
 
 
 def _non_loopback_address() -> str | None:
@@ -197,46 +169,13 @@ def _non_loopback_address() -> str | None:
 def explorer_server():
     pytest.importorskip("trame")
     pytest.importorskip("trame_vuetify")
-    port = _free_port()
-    env = dict(os.environ, PYTHONUNBUFFERED="1")
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "sciviz_gbuf", "explore", "--port", str(port), "--size", "512x384"],
-        cwd=ROOT,
-        env=env,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.STDOUT,
-        start_new_session=True,  # its own process group: everything it starts ends with it
-    )
-    try:
-        deadline = time.monotonic() + 40.0
-        while True:
-            if proc.poll() is not None:
-                out = proc.stdout.read().decode(errors="replace") if proc.stdout else ""
-                pytest.fail(f"explore exited with {proc.returncode}:\n{out}")
-            try:
-                with urllib.request.urlopen(f"http://127.0.0.1:{port}/", timeout=1) as r:
-                    if r.status == 200:
-                        break
-            except OSError:
-                pass
-            if time.monotonic() > deadline:
-                pytest.fail("explore did not answer within 40 s")
-            time.sleep(0.2)
-        yield port
-    finally:
-        os.killpg(proc.pid, signal.SIGTERM)
-        try:
-            proc.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait(timeout=10)
-        if proc.stdout:
-            proc.stdout.close()
+    with served_explorer(("--size", "512x384"), timeout=120.0) as served:
+        yield served
 
 
 def test_server_listens_on_loopback_only(explorer_server):
-    port = explorer_server
-    addrs = _listening_addresses(port)
+    port = explorer_server.port
+    addrs = listening_addresses(port)
     # 0100007F is 127.0.0.1 in the kernel's little-endian hex; no IPv6 or wildcard listener.
     assert addrs == ["0100007F"], addrs
     ip = _non_loopback_address()
@@ -273,14 +212,15 @@ def test_browser_slider_updates_the_image_within_200_ms(explorer_server, capsys)
     from selenium import webdriver
     from selenium.webdriver.chrome.service import Service
 
-    port = explorer_server
     opts = webdriver.ChromeOptions()
     for a in ("--headless=new", "--no-sandbox", "--disable-gpu", "--window-size=1280,900"):
         opts.add_argument(a)
     opts.binary_location = _CHROMIUM
     driver = webdriver.Chrome(options=opts, service=Service(_CHROMEDRIVER))
     try:
-        driver.get(f"http://127.0.0.1:{port}/")
+        # The printed URL: it carries the launch's secret, without which the page's websocket
+        # is refused.
+        driver.get(explorer_server.url)
         get_src = "const i = document.getElementById('image'); return i && i.getAttribute('src');"
         deadline = time.monotonic() + 30.0
         while not (src0 := driver.execute_script(get_src)):
