@@ -35,12 +35,22 @@ from typing import NoReturn
 
 from .errors import OutputError, SciVizGBufError
 
-__all__ = ["Interrupted", "Part", "atomic_output", "one_line", "raising_signals", "scratch_file"]
+__all__ = [
+    "Interrupted",
+    "Part",
+    "atomic_output",
+    "one_line",
+    "output_group",
+    "raising_signals",
+    "scratch_file",
+]
 
 #: Longest reason quoted in an OutputError (native libraries can print pages).
 _REASON_CHARS = 240
 _ANSI = re.compile(r"\x1b\[[0-9;]*[A-Za-z]")
 _TEMPORARY = re.compile(r"[^\s'\"]*\.[0-9a-f]{8}(?:\.\w+)?\.part\b")
+#: Active :func:`output_group` lists, innermost last (outputs are written by the main thread).
+_GROUPS: list[list[tuple[Part, bool]]] = []
 #: Serialises the redirection of file descriptor 2, which is one per process.
 _FD2_LOCK = threading.RLock()
 
@@ -251,7 +261,12 @@ class Part:
 
     def message(self, reason: str) -> str:
         """The one-line message of a failed write of this output, for ``reason``."""
-        lines = [ln.strip() for text, fold in self._native if fold for ln in text.splitlines()]
+        lines = [
+            _ANSI.sub("", ln).strip()
+            for text, fold in self._native
+            if fold
+            for ln in text.splitlines()
+        ]
         said = one_line(" ".join(dict.fromkeys(ln for ln in lines if ln)))  # each line once
         # A temporary's name in a library's text means the output: say the output's name.
         why = _TEMPORARY.sub(self.final.name, one_line(reason))
@@ -281,7 +296,8 @@ class Part:
         finally:
             self._native.extend((text, fold) for text in box)
 
-    def _commit(self, fsync: bool) -> None:
+    def _check(self, fsync: bool) -> None:
+        """The temporary is whole (and on disk): ready to be renamed."""
         if not self.path.is_file():
             self.fail("the writer produced no file")
         size = self.path.stat().st_size
@@ -289,6 +305,8 @@ class Part:
             self.fail(f"{size} bytes on disk of {self.expected_size} written")
         if fsync:
             _fsync(self.path)
+
+    def _rename(self, fsync: bool) -> None:
         os.replace(self.path, self.final)
         self.committed = True
         _remove(self.path)  # what a native writer left beside it
@@ -332,7 +350,11 @@ def atomic_output(path: str | os.PathLike, *, fsync: bool = True) -> Iterator[Pa
     part = Part(path)
     try:
         yield part
-        part._commit(fsync)
+        part._check(fsync)
+        if _GROUPS:
+            _GROUPS[-1].append((part, fsync))  # renamed when the group ends
+        else:
+            part._rename(fsync)
     except Interrupted as exc:
         _remove(part.path)
         if not part.committed:
@@ -348,6 +370,36 @@ def atomic_output(path: str | os.PathLike, *, fsync: bool = True) -> Iterator[Pa
         _remove(part.path)
         raise
     part._replay()
+
+
+@contextmanager
+def output_group() -> Iterator[None]:
+    """All outputs of the block, or none: each :func:`atomic_output` within it is checked as
+    usual but renamed to its name only when the block ends without an exception; on an
+    exception every one of them is removed (a command that exits with an error leaves none
+    of its outputs, not the first of two). Groups nest; the innermost one collects."""
+    group: list[tuple[Part, bool]] = []
+    _GROUPS.append(group)
+    try:
+        yield
+    except BaseException as exc:
+        _GROUPS.remove(group)
+        for part, _ in group:
+            _remove(part.path)
+            if isinstance(exc, Interrupted) and part.shown not in exc.outputs:
+                exc.outputs.append(part.shown)
+        raise
+    _GROUPS.remove(group)
+    try:
+        for part, fsync in group:
+            part._rename(fsync)
+    except BaseException as exc:
+        for part, _ in group:
+            if not part.committed:
+                _remove(part.path)
+        if isinstance(exc, OSError):
+            raise OutputError(part.message(_describe(exc))) from exc
+        raise
 
 
 @contextmanager

@@ -8,7 +8,7 @@ import sys
 from collections.abc import Sequence
 
 from .. import __version__
-from .._atomic import Interrupted, raising_signals
+from .._atomic import Interrupted, output_group, raising_signals
 from ..errors import SciVizGBufError
 from .demo import add_demo
 from .explore import add_explore
@@ -54,10 +54,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     half-written, see ``_atomic``)."""
     args = build_parser().parse_args(argv)
     # SIGTERM and SIGINT become an exception, so that the writers' clean-up runs: the output
-    # being written is removed and the process exits 2 with one line, not by the signal.
+    # being written is removed and the process exits 2 with one line, not by the signal. The
+    # outputs of one command are renamed to their names together at its end: a command that
+    # fails leaves none of them (not the PNG of a --geotiff that could not be written).
     with raising_signals():
         try:
-            return int(args.func(args))
+            with output_group():
+                return int(args.func(args))
         except (SciVizGBufError, Interrupted) as exc:
             print(f"sciviz-gbuf {args.command}: error: {exc}", file=sys.stderr)
             return 2
