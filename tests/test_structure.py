@@ -28,7 +28,7 @@ PACKAGE = Path(sciviz_gbuf.__file__).parent
 #: Layers from the bottom; a module may import its own layer and the ones below (as in
 #: pyproject.toml's import-linter contract, which `lint-imports` checks the same way).
 LAYERS = (
-    ("errors", "_validate", "_progress", "_dask"),
+    ("errors", "_validate", "_progress", "_dask", "_atomic"),
     ("readers",),
     ("datasets",),
     ("core", "isosurface"),

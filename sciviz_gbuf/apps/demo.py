@@ -26,6 +26,7 @@ import numpy as np
 import pyvista as pv
 
 from .. import styles
+from .._atomic import atomic_output
 from ..compose import colorize, ids_to_rgb, montage, normals_to_rgb, write_png
 from ..core.capture import capture, check_window_size
 from ..core.gbuffer import GBuffer
@@ -584,7 +585,9 @@ def _write_index(scenes: list[_Scene], figures: list[_Figure], outdir: Path) -> 
         f"{body}\n</body></html>\n"
     )
     path = outdir / "index.html"
-    path.write_text(page, encoding="utf-8")
+    data = page.encode("utf-8")
+    with atomic_output(path) as part:  # a page cut short by a full disk is not left behind
+        part.expected_size = part.path.write_bytes(data)
     return path
 
 

@@ -8,6 +8,7 @@ import sys
 from collections.abc import Sequence
 
 from .. import __version__
+from .._atomic import Interrupted, output_group, raising_signals
 from ..errors import SciVizGBufError
 from .demo import add_demo
 from .explore import add_explore
@@ -48,13 +49,21 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; returns the exit status (2 for bad input)."""
+    """Run the command line; returns the exit status: 0, or 2 for bad input, an output that
+    could not be written, or SIGTERM/SIGINT (one line on stderr; no output file is left
+    half-written, see ``_atomic``)."""
     args = build_parser().parse_args(argv)
-    try:
-        return int(args.func(args))
-    except SciVizGBufError as exc:
-        print(f"sciviz-gbuf {args.command}: error: {exc}", file=sys.stderr)
-        return 2
+    # SIGTERM and SIGINT become an exception, so that the writers' clean-up runs: the output
+    # being written is removed and the process exits 2 with one line, not by the signal. The
+    # outputs of one command are renamed to their names together at its end: a command that
+    # fails leaves none of them (not the PNG of a --geotiff that could not be written).
+    with raising_signals():
+        try:
+            with output_group():
+                return int(args.func(args))
+        except (SciVizGBufError, Interrupted) as exc:
+            print(f"sciviz-gbuf {args.command}: error: {exc}", file=sys.stderr)
+            return 2
 
 
 if __name__ == "__main__":  # pragma: no cover

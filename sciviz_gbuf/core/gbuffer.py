@@ -16,6 +16,7 @@ from zipfile import BadZipFile
 
 import numpy as np
 
+from .._atomic import Part, atomic_output
 from .._validate import LIMITS
 from ..errors import InputError
 from ._block_mean_kernels import block_mean
@@ -216,17 +217,37 @@ class GBuffer:
     def save(self, path: str | os.PathLike) -> Path:
         """Write to ``.npz`` (NumPy, compressed) or ``.vti`` (VTK XML image); lossless.
 
-        Returns the path written.
+        The file is complete or absent: it is written to a temporary file beside it, checked
+        (the bytes on disk are the bytes written; VTK's writer reported no error and wrote the
+        closing tag) and renamed.
+
+        Returns
+        -------
+        pathlib.Path
+            The path written.
+
+        Raises
+        ------
+        InputError
+            Another suffix, or a folder that does not exist.
+        OutputError
+            The file could not be written completely (disk full, file too large, no
+            permission, interrupted); nothing new is left under its name.
         """
         p = Path(path)
         suffix = p.suffix.lower()
-        if suffix == ".npz":
-            arrays = self.channels()
-            np.savez_compressed(p, **arrays, **{META_KEY: np.array(self._meta())})
-        elif suffix == ".vti":
-            self.to_pyvista().save(p)
-        else:
+        if suffix not in (".npz", ".vti"):
             raise InputError(f"{p}: G-buffers are saved as .npz or .vti, not {suffix!r}")
+        if not p.parent.is_dir():
+            raise InputError(f"{p}: no such directory {str(p.parent)!r}")
+        with atomic_output(path) as part:
+            if suffix == ".npz":
+                arrays = self.channels()
+                with open(part.path, "wb") as f:
+                    np.savez_compressed(f, **arrays, **{META_KEY: np.array(self._meta())})
+                    part.expected_size = f.tell()
+            else:
+                _write_vti(self.to_pyvista(), part)
         return p
 
     @classmethod
@@ -333,6 +354,46 @@ def _check_camera(cam: CameraInfo, path: str) -> None:
         raise InputError(f"{path}: camera record: window size {w}x{h} is not 1..{side:g} a side")
     if np.linalg.norm(np.subtract(cam.focal_point, cam.position)) == 0:
         raise InputError(f"{path}: camera record: the eye is at its focal point")
+
+
+def _write_vti(image, part: Part) -> None:
+    """``image`` into ``part.path`` as PyVista writes ``.vti`` (binary, zlib), with VTK's
+    errors checked: VTK's writers report them only to its log and the return value of
+    ``Write`` (a full disk leaves a cut file and an error code, no exception)."""
+    from vtkmodules.util.misc import calldata_type
+    from vtkmodules.util.vtkConstants import VTK_STRING
+    from vtkmodules.vtkCommonCore import vtkCommand
+    from vtkmodules.vtkCommonMisc import vtkErrorCode
+    from vtkmodules.vtkIOXML import vtkXMLImageDataWriter
+
+    messages: list[str] = []
+
+    @calldata_type(VTK_STRING)
+    def on_error(_obj, _event, text=None) -> None:
+        messages.append(str(text or ""))
+
+    writer = vtkXMLImageDataWriter()
+    writer.SetFileName(str(part.path))
+    writer.SetInputData(image)
+    writer.SetDataModeToBinary()
+    writer.SetCompressorTypeToZLib()
+    # An observer takes the writer's error text instead of VTK's log; what the pipeline
+    # prints about the failure is captured, and left out of the message (the error code says
+    # it in one line).
+    writer.AddObserver(vtkCommand.ErrorEvent, on_error)
+    writer.GetExecutive().AddObserver(vtkCommand.ErrorEvent, on_error)
+    with part.native(fold=False):
+        ok = writer.Write()
+    code = writer.GetErrorCode()
+    if ok != 1 or code != 0:
+        # The error code is errno's (or VTK's own) in one line; else the first message.
+        reason = vtkErrorCode.GetStringFromErrorCode(code) if code else ""
+        part.fail(reason or next((m for m in messages if m.strip()), "VTK's writer failed"))
+    # The last bytes of a whole VTK XML file: a check that the stream was not cut short.
+    with open(part.path, "rb") as f:
+        f.seek(max(0, part.path.stat().st_size - 64))
+        if b"</VTKFile>" not in f.read():
+            part.fail("VTK's file is incomplete")
 
 
 def check_gbuffer(gb: object) -> GBuffer:

@@ -11,6 +11,7 @@ installed, else zlib's.
 
 from __future__ import annotations
 
+import errno
 import os
 import struct
 import zlib
@@ -108,8 +109,15 @@ def encode_png(image: np.ndarray, *, level: int = 1, threads: int | None = None)
 
 
 def write_png_fast(path: Path, image: np.ndarray, *, level: int = 1) -> Path:
-    """Write the PNG of :func:`encode_png` to ``path`` chunk by chunk, as blocks finish."""
+    """Write the PNG of :func:`encode_png` to ``path`` chunk by chunk, as blocks finish.
+
+    Raises OSError if the file on disk does not hold every byte written (a file system that
+    accepted a short write without an error)."""
+    written = 0
     with open(path, "wb") as f:
         for piece in _pieces(image, level, None):
-            f.write(piece)
-    return path
+            written += f.write(piece)
+    size = os.stat(path).st_size
+    if size != written:
+        raise OSError(errno.EIO, f"{size} bytes on disk of {written} written", str(path))
+    return Path(path)

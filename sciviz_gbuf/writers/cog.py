@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import os
 import threading
-import uuid
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
@@ -21,9 +20,10 @@ from typing import Any
 import numpy as np
 
 from .. import _dask
+from .._atomic import Part, atomic_output, scratch_file
 from .._progress import progress
 from ..errors import InputError, SciVizGBufError
-from .geotiff import georeference, rasterio_crs, uint8_profile
+from .geotiff import check_tiff, gdal_writing, georeference, rasterio_crs, uint8_profile
 from .png import to_uint8, write_png
 
 __all__ = ["local_client", "write_cog"]
@@ -160,6 +160,11 @@ def write_cog(
         folder, no georeference (neither ``dem=`` nor ``transform=``) or both, a bad
         transform or CRS, an image of another shape or dtype, a DEM of another shape, a bad
         ``overview_size`` or ``client``.
+    OutputError
+        The COG or its preview could not be written completely (disk full, file too large, a
+        GDAL error, interrupted): neither is left under its name. Both are written to
+        temporary files beside them, checked (the TIFF is whole, its layout a COG) and renamed
+        only when both are done (the preview first).
     """
     import rasterio
     import rasterio.shutil
@@ -185,46 +190,51 @@ def write_cog(
         3: [ColorInterp.red, ColorInterp.green, ColorInterp.blue],
         4: [ColorInterp.red, ColorInterp.green, ColorInterp.blue, ColorInterp.alpha],
     }[c]
-    stem = f".{out.name}.{uuid.uuid4().hex[:8]}"
-    tmp, tmp_cog = out.with_name(stem + ".tmp.tif"), out.with_name(stem + ".cog.tif")
     large = h * w >= 4_000_000
     with (
         # GDAL's block cache defaults to 5 % of RAM, filled with dirty tiles before it flushes:
         # a fixed cap keeps this process's memory independent of the image size.
         rasterio.Env(GDAL_CACHEMAX=_CACHE_MB),
         progress(progress_bar, n_blocks + 1 + (png is not None), "write_cog") as bar,
+        # The COG and its preview are complete or absent: the COG stays in its temporary file
+        # until the preview (read from it) is written too.
+        atomic_output(path) as part,
     ):
-        try:
-            with rasterio.open(tmp, "w", **profile) as dst:
-                dst.colorinterp = interp  # before the pixels: GDAL sets ExtraSamples then
-                writer = _WindowWriter(dst, bar, n_blocks)
+        with scratch_file(out, "tiles") as tmp:
+            writer = _WindowWriter(tmp, profile, interp, part, bar, n_blocks)
+            try:
                 if is_lazy:
                     _compute_into(pixels, writer, client)
                 else:
                     for r0 in range(0, h, 4 * BLOCK):
                         writer[r0 : r0 + 4 * BLOCK, 0:w] = pixels[r0 : r0 + 4 * BLOCK]
-            rasterio.shutil.copy(
-                tmp,
-                tmp_cog,
-                driver="COG",
-                BLOCKSIZE=BLOCK,
-                COMPRESS="DEFLATE",
-                # Level 1 on large maps: ~3x faster than 6 for a few % more bytes.
-                LEVEL=1 if large else 6,
-                PREDICTOR="YES",
-                RESAMPLING="AVERAGE",
-                OVERVIEWS="IGNORE_EXISTING",
-                BIGTIFF="IF_SAFER",
-                NUM_THREADS="ALL_CPUS",
-            )
-            os.replace(tmp_cog, out)
-        finally:
-            for f in (tmp, tmp_cog):
-                f.unlink(missing_ok=True)
+            except BaseException:
+                writer.close(quiet=True)
+                raise
+            writer.close()
+            check_tiff(part, (h, w, c), tmp)  # the intermediate: its close may have failed
+            with gdal_writing(part):
+                rasterio.shutil.copy(
+                    tmp,
+                    part.path,
+                    driver="COG",
+                    BLOCKSIZE=BLOCK,
+                    COMPRESS="DEFLATE",
+                    # Level 1 on large maps: ~3x faster than 6 for a few % more bytes.
+                    LEVEL=1 if large else 6,
+                    PREDICTOR="YES",
+                    RESAMPLING="AVERAGE",
+                    OVERVIEWS="IGNORE_EXISTING",
+                    BIGTIFF="IF_SAFER",
+                    NUM_THREADS="ALL_CPUS",
+                )
+        check_tiff(part, (h, w, c))
+        problem = _layout_problem(part.path)
+        if problem is not None:
+            part.fail(f"not a valid Cloud-Optimised GeoTIFF: {problem}")
         bar.step("COG")
-        check_cog(out)
         if png is not None:
-            _overview_png(out, png, int(overview_size))
+            _overview_png(part.path, png, int(overview_size))
             bar.step("overview")
     return out
 
@@ -232,6 +242,13 @@ def write_cog(
 def check_cog(path: str | os.PathLike) -> None:
     """Raise :class:`~sciviz_gbuf.errors.SciVizGBufError` unless ``path`` is a tiled COG (GDAL's
     ``LAYOUT=COG``) with overviews (when larger than one tile)."""
+    problem = _layout_problem(path)
+    if problem is not None:
+        raise SciVizGBufError(f"{path}: not a valid Cloud-Optimised GeoTIFF ({problem})")
+
+
+def _layout_problem(path: str | os.PathLike) -> str | None:
+    """What makes ``path`` no COG (``LAYOUT``, tiling, overviews), or None."""
     import rasterio
 
     with rasterio.open(path) as src:
@@ -240,10 +257,8 @@ def check_cog(path: str | os.PathLike) -> None:
         overviews = src.overviews(1)
         big = max(src.shape) > BLOCK
     if layout != "COG" or not tiled or (big and not overviews):
-        raise SciVizGBufError(
-            f"{path}: not a valid Cloud-Optimised GeoTIFF (LAYOUT={layout}, tiled={tiled}, "
-            f"overviews={overviews})"
-        )
+        return f"LAYOUT={layout}, tiled={tiled}, overviews={overviews}"
+    return None
 
 
 def _tif_path(path: str | os.PathLike) -> Path:
@@ -317,11 +332,25 @@ def _profile(h: int, w: int, c: int, dem: Any, transform: Any, crs: Any) -> dict
 
 
 class _WindowWriter:
-    """``writer[rows, cols] = block`` writes an (h, w, c) block as a window, one at a time."""
+    """``writer[rows, cols] = block`` writes an (h, w, c) block as a window of the tiled
+    GeoTIFF ``path``, one at a time; :meth:`close` closes it.
 
-    def __init__(self, dst: Any, bar: Any, total: int) -> None:
-        self.dst, self.bar, self.total, self.done = dst, bar, total, 0
+    Each GDAL call runs under :func:`~sciviz_gbuf.writers.geotiff.gdal_writing` (GDAL's
+    messages and errors become the OutputError of ``part``), but not the progress bar's
+    update, which must reach the terminal as it happens.
+    """
+
+    def __init__(
+        self, path: Path, profile: dict, interp: list, part: Part, bar: Any, total: int
+    ) -> None:
+        import rasterio
+
+        self.part, self.bar, self.total, self.done = part, bar, total, 0
         self.lock = threading.Lock()
+        self.closed = False
+        with gdal_writing(part):
+            self.dst = rasterio.open(path, "w", **profile)
+            self.dst.colorinterp = interp  # before the pixels: GDAL sets ExtraSamples then
 
     def __setitem__(self, key: tuple[slice, ...], block: np.ndarray) -> None:
         from rasterio.windows import Window
@@ -330,9 +359,26 @@ class _WindowWriter:
         block = np.asarray(block)
         h, w = block.shape[:2]
         with self.lock:  # GDAL datasets are not thread-safe; da.store calls from its threads
-            self.dst.write(np.moveaxis(block, 2, 0), window=Window(c0, r0, w, h))
+            if self.closed:  # the write was abandoned (an error, a signal): drop the block
+                raise SciVizGBufError(f"{self.part.shown}: write abandoned")
+            with gdal_writing(self.part):
+                self.dst.write(np.moveaxis(block, 2, 0), window=Window(c0, r0, w, h))
             self.done += 1
             self.bar.step(f"block {self.done}/{self.total}")
+
+    def close(self, *, quiet: bool = False) -> None:
+        """Close the file once no thread writes to it; ``quiet``: while another exception is
+        on its way up (the file is discarded), ignore GDAL's errors of the close."""
+        with self.lock:
+            if self.closed:
+                return
+            self.closed = True
+            try:
+                with gdal_writing(self.part):
+                    self.dst.close()
+            except SciVizGBufError:
+                if not quiet:
+                    raise
 
 
 def _compute_into(image, writer: _WindowWriter, client: Any) -> None:

@@ -3,16 +3,26 @@ Cloud-Optimized GeoTIFF writer shares."""
 
 from __future__ import annotations
 
+import math
 import os
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 
+from .._atomic import Part, atomic_output
 from ..errors import InputError
 from .png import LARGE_IMAGE, to_uint8
 
-__all__ = ["georeference", "rasterio_crs", "uint8_profile", "write_geotiff"]
+__all__ = [
+    "check_tiff",
+    "gdal_writing",
+    "georeference",
+    "rasterio_crs",
+    "uint8_profile",
+    "write_geotiff",
+]
 
 
 def georeference(dem: object, transform: object, crs: object, who: str) -> np.ndarray:
@@ -39,6 +49,53 @@ def rasterio_crs(crs: object):
         return None if crs is None else CRS.from_user_input(crs)
     except Exception as exc:  # rasterio raises its own CRSError family
         raise InputError(f"crs: rasterio cannot read {str(crs)[:80]!r}: {exc}") from exc
+
+
+@contextmanager
+def gdal_writing(part: Part) -> Iterator[None]:
+    """Around GDAL calls that write ``part``: what GDAL and libtiff print goes into the
+    message (they print to file descriptor 2, not through Python), and rasterio's exceptions
+    become the :class:`~sciviz_gbuf.errors.OutputError` naming the output."""
+    from rasterio._err import CPLE_BaseError
+    from rasterio.errors import RasterioError
+
+    with part.native():
+        try:
+            yield
+        except (RasterioError, CPLE_BaseError) as exc:
+            part.fail(exc)
+
+
+def check_tiff(part: Part, shape: tuple[int, int, int], path: Path | None = None) -> None:
+    """Raise the OutputError of ``part`` unless the closed TIFF it holds (or ``path``, a file
+    written on its way) is whole.
+
+    rasterio does not report errors of GDAL's close, where the TIFF directory and the last
+    cached blocks are written: a full disk there leaves a file that looks written. So the file
+    is opened again (the directory is readable), its size and bands are ``shape`` ``(h, w, c)``,
+    and every block of the full-resolution image (band 1: the bands are pixel-interleaved)
+    has an offset and lies within the file's size. Overviews of a COG come before those
+    blocks, so a file cut short loses the last of them first. Only the TIFF directory is read.
+    """
+    import rasterio
+
+    path = part.path if path is None else path
+    size = path.stat().st_size
+    with gdal_writing(part), rasterio.open(path) as src:
+        got = (src.height, src.width, src.count)
+        if got != tuple(shape):
+            part.fail(f"GDAL reads an image of (rows, columns, bands) {got}, not {tuple(shape)}")
+        bh, bw = src.block_shapes[0]
+        end = 0
+        for i in range(math.ceil(src.height / bh)):
+            for j in range(math.ceil(src.width / bw)):
+                offset = src.get_tag_item(f"BLOCK_OFFSET_{j}_{i}", "TIFF", bidx=1)
+                nbytes = src.get_tag_item(f"BLOCK_SIZE_{j}_{i}", "TIFF", bidx=1)
+                if not offset or not nbytes or int(offset) == 0 or int(nbytes) == 0:
+                    part.fail(f"block ({i}, {j}) of the image was not written")
+                end = max(end, int(offset) + int(nbytes))
+    if end > size:
+        part.fail(f"the image's blocks need {end} bytes, the file holds {size}")
 
 
 def uint8_profile(
@@ -110,6 +167,15 @@ def write_geotiff(
     Returns
     -------
     pathlib.Path
+
+    Raises
+    ------
+    InputError
+        A bad name, folder, image or georeference.
+    OutputError
+        The file could not be written completely (disk full, file too large, a GDAL error,
+        interrupted): nothing new is left under its name (it is written to a temporary file
+        beside it, checked with :func:`check_tiff`, then renamed).
     """
     p = Path(path)
     if p.suffix.lower() not in (".tif", ".tiff"):
@@ -145,7 +211,9 @@ def write_geotiff(
         3: [ColorInterp.red, ColorInterp.green, ColorInterp.blue],
         4: [ColorInterp.red, ColorInterp.green, ColorInterp.blue, ColorInterp.alpha],
     }[c]
-    with rasterio.open(p, "w", **profile) as dst:
-        dst.colorinterp = interp  # before the pixels: GDAL fixes the TIFF's ExtraSamples then
-        dst.write(np.moveaxis(pixels, 2, 0))
+    with atomic_output(path) as part:
+        with gdal_writing(part), rasterio.open(part.path, "w", **profile) as dst:
+            dst.colorinterp = interp  # before the pixels: GDAL fixes the TIFF's ExtraSamples
+            dst.write(np.moveaxis(pixels, 2, 0))
+        check_tiff(part, (h, w, c))
     return p

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._atomic import atomic_output
 from ..errors import InputError
 from ._png_encoder import write_png_fast
 
@@ -63,6 +64,15 @@ def write_png(path: str | os.PathLike, image: np.ndarray) -> Path:
     -------
     pathlib.Path
         The path written.
+
+    Raises
+    ------
+    InputError
+        A name not ending in ``.png``, a missing folder, an image of another shape or dtype.
+    OutputError
+        The file could not be written completely (disk full, file too large, no permission,
+        interrupted): nothing new is left under its name (it is written to a temporary file
+        beside it, checked, then renamed).
     """
     from PIL import Image
 
@@ -72,7 +82,13 @@ def write_png(path: str | os.PathLike, image: np.ndarray) -> Path:
     if not p.parent.is_dir():
         raise InputError(f"path: no such directory {str(p.parent)!r}")
     pixels = to_uint8(image)
-    if pixels.shape[0] * pixels.shape[1] >= LARGE_IMAGE:
-        return write_png_fast(p, pixels)
-    Image.fromarray(pixels).save(p, format="PNG")
+    with atomic_output(path) as part:
+        if pixels.shape[0] * pixels.shape[1] >= LARGE_IMAGE:
+            write_png_fast(part.path, pixels)  # checks the size on disk itself
+        else:
+            with open(part.path, "wb") as f:
+                Image.fromarray(pixels).save(f, format="PNG")
+                # Pillow writes through this buffered file: the size it reached is what the
+                # disk must hold once the buffer is flushed by close().
+                part.expected_size = f.tell()
     return p
