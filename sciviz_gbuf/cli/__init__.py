@@ -5,10 +5,11 @@ from __future__ import annotations
 
 import argparse
 import sys
+import warnings
 from collections.abc import Sequence
 
 from .. import __version__
-from .._atomic import Interrupted, output_group, raising_signals
+from .._atomic import Interrupted, one_line, output_group, raising_signals
 from ..errors import SciVizGBufError
 from .demo import add_demo
 from .explore import add_explore
@@ -57,14 +58,20 @@ def main(argv: Sequence[str] | None = None) -> int:
     # being written is removed and the process exits 2 with one line, not by the signal. The
     # outputs of one command are renamed to their names together at its end: a command that
     # fails leaves none of them (not the PNG of a --geotiff that could not be written).
-    with raising_signals():
+    # Warnings are held and printed as one line each after the command succeeded: a failure
+    # prints its one error line only (a warning about, say, a missing georeference before it
+    # would only obscure it).
+    with raising_signals(), warnings.catch_warnings(record=True) as caught:
         try:
             with output_group():
-                return int(args.func(args))
+                status = int(args.func(args))
         except (SciVizGBufError, Interrupted) as exc:
             print(f"sciviz-gbuf {args.command}: error: {exc}", file=sys.stderr)
             return 2
-
+    for w in caught:
+        if not issubclass(w.category, (DeprecationWarning, PendingDeprecationWarning)):
+            print(f"sciviz-gbuf {args.command}: warning: {one_line(str(w.message))}", file=sys.stderr)
+    return status
 
 if __name__ == "__main__":  # pragma: no cover
     raise SystemExit(main())
