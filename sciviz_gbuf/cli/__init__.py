@@ -70,8 +70,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             return 2
     for w in caught:
         if not issubclass(w.category, (DeprecationWarning, PendingDeprecationWarning)):
-            print(f"sciviz-gbuf {args.command}: warning: {one_line(str(w.message))}", file=sys.stderr)
+            text = one_line(str(w.message))
+            print(f"sciviz-gbuf {args.command}: warning: {text}", file=sys.stderr)
     return status
+
 
 if __name__ == "__main__":  # pragma: no cover
     raise SystemExit(main())
