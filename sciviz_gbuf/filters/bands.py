@@ -73,8 +73,8 @@ def band_tables(
     base = _validate.finite(base, "base")
     land = _lut(HYPSOMETRIC if cmap is None else _validate.colormap(cmap, "cmap"))
     sea = _lut(BATHYMETRIC if sea_cmap is None else _validate.colormap(sea_cmap, "sea_cmap"))
-    lo = float(data.min()) if vmin is None else float(vmin)
-    hi = float(data.max()) if vmax is None else float(vmax)
+    lo = float(data.min()) if vmin is None else _validate.finite(vmin, "vmin")
+    hi = float(data.max()) if vmax is None else _validate.finite(vmax, "vmax")
     if not (np.isfinite(lo) and np.isfinite(hi) and lo <= hi):
         raise InputError(f"vmin, vmax: expected finite numbers with vmin <= vmax, got {lo}, {hi}")
     lv = mids = np.zeros(1)
@@ -82,7 +82,7 @@ def band_tables(
     if interval is not None:
         mode, q = _bk.INTERVAL, _validate.positive(interval, "interval")
     elif levels is not None:
-        mode, lv = _bk.LEVELS, _validate.levels(levels)
+        mode, lv = _bk.LEVELS, _validate.levels(levels, "levels", limit="bands")
         # Band k lies between edges[k] and edges[k + 1]; the outer bands are as wide as their
         # neighbours (or 1 when there is a single level).
         gap_lo = lv[1] - lv[0] if lv.size > 1 else 1.0
@@ -94,9 +94,7 @@ def band_tables(
     if sea_level is None:
         tab = (*_scale(lo, hi), 0.0, 0.0, np.nan)
     else:
-        s = float(sea_level)
-        if not np.isfinite(s):
-            raise InputError(f"sea_level: expected a finite number, got {sea_level!r}")
+        s = _validate.finite(sea_level, "sea_level")
         # Heights below the sea level take the sea colours, by the height itself: a band
         # never puts land under the sea.
         tab = (*_scale(s, max(hi, s)), *_scale(min(lo, s), s), s)
@@ -140,9 +138,10 @@ def color_bands(
         Heights (or any scalar); NaN/inf are nodata.
     interval : float > 0, optional
         Discrete bands ``[base + n q, base + (n + 1) q)``, each one colour (that of its
-        middle). Default: a continuous ramp.
+        middle). Default: a continuous ramp. (Not bounded: the band of a pixel is computed
+        from its height, so the work does not grow with the number of bands.)
     levels : sequence of float, optional
-        Band edges instead of a regular ``interval``.
+        Band edges instead of a regular ``interval``; at most ``LIMITS["bands"]`` = 4096.
     base : float, default: 0
         Offset of the regular bands.
     cmap : str or matplotlib Colormap, optional
