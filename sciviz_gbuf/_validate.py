@@ -55,6 +55,8 @@ LIMITS: dict[str, float] = {
     "shade_levels": 256,  # texels of the toon shade texture
     "copies": 100,  # photocopy generations
     "blur": 64.0,  # px: photocopy toner spread (Gaussian sigma; its kernel grows with it)
+    "resolution": 4096,  # tessellation intervals per patch side (patches, parametric surfaces)
+    "mesh_points": 2**24,  # points of one tessellation (all patches together)
     "image_side": 16384,  # px: one side of a capture or an output image
     "supersample": 8,  # capture supersampling factor
     "image_pixels": 2**28,  # width x height x supersample^2 of one capture

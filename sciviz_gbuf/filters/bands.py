@@ -189,6 +189,32 @@ def color_bands(
     return out
 
 
+def _check_tables(tables: object) -> tuple:
+    """``tables`` as :func:`band_tables` makes them, checked so the kernel cannot read past
+    an array: a mode, two scalars, levels and band middles (one more than the levels), two
+    (n, 3) colour tables and the 5 ramp numbers."""
+    what = "tables: expected None or band_tables(...) of the map's options"
+    try:
+        mode, base, q, lv, mids, land, sea, tab = tables  # type: ignore[misc]
+        ok = isinstance(mode, (int, np.integer)) and not isinstance(mode, (bool, np.bool_))
+        ok = ok and int(mode) in (_bk.CONTINUOUS, _bk.INTERVAL, _bk.LEVELS)
+        lv = np.ascontiguousarray(lv, dtype=np.float64)
+        mids = np.ascontiguousarray(mids, dtype=np.float64)
+        land = np.ascontiguousarray(land, dtype=np.float32)
+        sea = np.ascontiguousarray(sea, dtype=np.float32)
+        tab = np.ascontiguousarray(tab, dtype=np.float32)
+        base, q = np.float32(_validate.finite(base, "base")), np.float32(q)
+    except (TypeError, ValueError, InputError, OverflowError):
+        raise InputError(f"{what}, got {_validate.brief(tables)}") from None
+    ok = ok and lv.ndim == 1 and lv.size >= 1 and mids.ndim == 1
+    ok = ok and mids.size >= (lv.size + 1 if int(mode) == _bk.LEVELS else 1)
+    ok = ok and all(t.ndim == 2 and t.shape[0] >= 1 and t.shape[1] == 3 for t in (land, sea))
+    ok = ok and tab.shape == (5,) and bool(np.isfinite(q) and q > 0)
+    if not ok:
+        raise InputError(f"{what}, got {_validate.brief(tables)}")
+    return (int(mode), base, q, lv, mids, land, sea, tab)
+
+
 def _chunked_bands(heights, mask, vmin, vmax, **params):
     """:func:`color_bands` chunk by chunk (each cell's colour is its own): the default
     ``vmin``/``vmax`` come first from one reduction pass over the valid heights."""
@@ -256,8 +282,13 @@ def composite_map(
     -------
     (H, W, 4) uint8 RGBA
     """
-    z = np.ascontiguousarray(heights, dtype=np.float32)
-    colours = tables
+    z = _validate.image(heights, "heights")
+    # The fused kernel indexes every layer and table without bounds checks: all are checked.
+    colours = None if tables is None else _check_tables(tables)
+    flat = _validate.positive(flat, "flat")
+    for name, a in (("relief", relief), ("shadow", shadow), ("sky", sky), ("ink", ink)):
+        if a is not None and np.shape(a) != z.shape:
+            raise InputError(f"{name}: expected shape {z.shape} (like heights), got {np.shape(a)}")
     if colours is None:  # no bands: white paper (the kernel ignores the tables)
         colours = band_tables(
             np.zeros(1, np.float32),
@@ -272,9 +303,9 @@ def composite_map(
         )
     empty = np.zeros((0, 0), np.float32)
 
-    def layer(a: np.ndarray | None) -> np.ndarray:
+    def layer(a: np.ndarray | None, name: str) -> np.ndarray:
         # contiguous float32 always: one compiled signature of the kernel, not one per layout
-        return empty if a is None else np.ascontiguousarray(a, dtype=np.float32)
+        return empty if a is None else _validate.image(a, name)
 
     out = np.empty((*z.shape, 4), dtype=np.uint8)
     _bk.map_image(
@@ -282,11 +313,11 @@ def composite_map(
         tables is not None,
         *colours,
         relief is not None,
-        layer(relief),
+        layer(relief, "relief"),
         np.float32(flat),
-        layer(shadow),
-        layer(sky),
-        layer(ink),
+        layer(shadow, "shadow"),
+        layer(sky, "sky"),
+        layer(ink, "ink"),
         _validate.rgb(ink_color, "ink_color"),
         out,
     )
