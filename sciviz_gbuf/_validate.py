@@ -67,7 +67,7 @@ def at_most(value: float, name: str, limit: str) -> float:
     """``value`` itself if it is at most ``LIMITS[limit]``, else an InputError naming it."""
     bound = LIMITS[limit]
     if not value <= bound:
-        raise InputError(f"{name}: expected at most {bound:g}, got {value!r}")
+        raise InputError(f"{name}: expected at most {bound:g}, got {brief(value)}")
     return value
 
 
@@ -317,7 +317,7 @@ def colormap(cmap: object, name: str = "cmap"):
     try:
         cm = matplotlib.colormaps[cmap] if isinstance(cmap, str) else cmap
     except KeyError:
-        raise InputError(f"{name}: unknown colour map {cmap!r}") from None
+        raise InputError(f"{name}: unknown colour map {brief(cmap)}") from None
     if not callable(cm):
-        raise InputError(f"{name}: expected a colour map name or Colormap, got {cmap!r}")
+        raise InputError(f"{name}: expected a colour map name or Colormap, got {brief(cmap)}")
     return cm

@@ -65,7 +65,7 @@ def check_window_size(window_size: object) -> tuple[int, int]:
     if int(w) > side or int(h) > side:
         raise InputError(
             f"window_size: expected at most {side} pixels per side (LIMITS['image_side']), "
-            f"got {int(w)}x{int(h)}"
+            f"got {int(w)}x{int(h)}, which exceeds it"
         )
     return int(w), int(h)
 
