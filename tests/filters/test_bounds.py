@@ -60,7 +60,7 @@ def _enhance(gb, **kw):
 
 
 def _suppress(gb, **kw):
-    return F.suppress_zeroth_order(FIELD, FIELD * 0.1, FIELD * 0.01, **kw)
+    return F.suppress_zeroth_order(FIELD * 0.01, FIELD * 0.1, **kw)
 
 
 # Public filters that are not one-image-to-one-image (not in the registry): how to call them
