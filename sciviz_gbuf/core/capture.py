@@ -15,6 +15,7 @@ from collections.abc import Sequence
 import numpy as np
 from vtkmodules.vtkRenderingCore import vtkCamera
 
+from .. import _validate
 from .._progress import progress
 from ..errors import InputError
 from . import _capture_kernels as _kernels
@@ -24,32 +25,78 @@ from .gbuffer import GBuffer
 from .scene import Surface, collect_surfaces, is_plotter
 
 __all__ = [
+    "BYTES_PER_PIXEL",
     "DEFAULT_WINDOW_SIZE",
     "MAX_BUFFER_SIZE",
     "capture",
+    "check_capture_size",
     "check_scalars",
     "check_window_size",
     "resolve_camera",
 ]
 
 DEFAULT_WINDOW_SIZE = (1024, 768)
-#: Largest buffer edge in pixels (window size times supersample); OpenGL's usual limit.
-MAX_BUFFER_SIZE = 16384
+#: Largest buffer edge in pixels (window size times supersample); OpenGL's usual limit:
+#: ``LIMITS["image_side"]``.
+MAX_BUFFER_SIZE = int(_validate.LIMITS["image_side"])
+#: Peak memory of a capture per buffer pixel (bytes): the render window's colour and depth
+#: planes and their read-back, the triangle ids, the barycentrics and the G-buffer's own
+#: channels (45 bytes, kept). 65 bytes of peak RSS were measured at 2048^2 and 4096^2
+#: buffers; the margin covers the driver's framebuffer, which RSS may not show.
+BYTES_PER_PIXEL = 96
 # Margin of the tight clipping range, relative to the depth extent of the data.
 _CLIP_MARGIN = 1e-3
 
 
 def check_window_size(window_size: object) -> tuple[int, int]:
+    """``(width, height)`` as two positive integers, each at most ``LIMITS["image_side"]``."""
     try:
         w, h = window_size  # type: ignore[misc]
-        ok = all(float(v) == int(v) for v in (w, h))
+        ok = not any(isinstance(v, (bool, np.bool_, str, bytes)) for v in (w, h))
+        ok = ok and all(float(v) == int(v) for v in (w, h))
     except (TypeError, ValueError, OverflowError):
         ok = False
     if not ok or int(w) <= 0 or int(h) <= 0:
         raise InputError(
-            f"window_size: expected two positive integers (width, height), got {window_size!r}"
+            "window_size: expected two positive integers (width, height), got "
+            f"{_validate.brief(window_size)}"
+        )
+    side = int(_validate.LIMITS["image_side"])
+    if int(w) > side or int(h) > side:
+        raise InputError(
+            f"window_size: expected at most {side} pixels per side (LIMITS['image_side']), "
+            f"got {int(w)}x{int(h)}, which exceeds it"
         )
     return int(w), int(h)
+
+
+def check_capture_size(window_size: object, supersample: object) -> tuple[int, int, int]:
+    """``(width, height, supersample)`` of a capture that fits every bound, checked before
+    anything is allocated: each side and ``supersample`` (``LIMITS["supersample"]``), the
+    buffer side (``LIMITS["image_side"]``), the buffer pixels ``width x height x
+    supersample^2`` (``LIMITS["image_pixels"]``) and their memory (:data:`BYTES_PER_PIXEL`
+    each) against the memory available now.
+    """
+    width, height = check_window_size(window_size)
+    k = _validate.count(supersample, "supersample", "supersample")
+    size = (width * k, height * k)
+    if max(size) > MAX_BUFFER_SIZE:
+        raise InputError(
+            f"window_size x supersample = {size[0]}x{size[1]} exceeds {MAX_BUFFER_SIZE} pixels "
+            "per side (LIMITS['image_side'])"
+        )
+    pixels = size[0] * size[1]
+    if pixels > _validate.LIMITS["image_pixels"]:
+        raise InputError(
+            f"window_size x supersample = {size[0]}x{size[1]} = {pixels} pixels exceeds "
+            f"{_validate.LIMITS['image_pixels']:g} (LIMITS['image_pixels'])"
+        )
+    _validate.check_memory(
+        pixels * BYTES_PER_PIXEL,
+        "window_size",
+        f"a {size[0]}x{size[1]} capture (window_size x supersample)",
+    )
+    return width, height, k
 
 
 def check_scalars(scalars: object) -> tuple[str, ...]:
@@ -214,7 +261,11 @@ def capture(
         (with their transforms) and, unless ``camera`` is given, its camera. Nothing given is
         modified.
     window_size : (int, int), optional
-        Output image ``(width, height)``; default the Plotter's size or ``(1024, 768)``.
+        Output image ``(width, height)``; default the Plotter's size or ``(1024, 768)``. Each
+        side at most ``LIMITS["image_side"]`` = 16384, and so is each side of the buffers
+        (``window_size * supersample``); their pixels at most ``LIMITS["image_pixels"]`` =
+        2**28, and their memory (:data:`BYTES_PER_PIXEL` bytes each) at most what is
+        available when the capture starts.
     camera : str, vtkCamera, CameraInfo or (position, focal_point, view_up), optional
         A view name (``'iso'``, ``'xy'``, ``'xz'``, ``'yz'``, ``'yx'``, ``'zx'``, ``'zy'``) is
         fitted to the data like PyVista's ``view_*``; a camera or camera position is used as given
@@ -223,9 +274,9 @@ def capture(
         Force orthographic (True) or perspective (False); default: as the camera is.
     scalars : str or sequence of str
         Point or cell arrays to capture into ``GBuffer.scalars`` (NaN on objects lacking them).
-    supersample : int, default: 1
+    supersample : int in [1, 8], default: 1
         Render at ``supersample`` times the window size; :meth:`GBuffer.downsample` averages
-        results back to the window size (antialiasing).
+        results back to the window size (antialiasing). At most ``LIMITS["supersample"]`` = 8.
     feature_angle : float, default: 30.0
         For data without point normals: normals are computed and split at edges sharper than
         this many degrees (PyVista's ``split_sharp_edges``); 180 smooths everything.
@@ -240,24 +291,14 @@ def capture(
     Raises
     ------
     InputError
-        Empty scene, bad window size, NaN coordinates, unknown scalar name, bad camera.
+        Empty scene, bad window size, NaN coordinates, unknown scalar name, bad camera; a
+        capture beyond the limits above or larger than the memory available.
     """
     if window_size is None:
         window_size = tuple(scene.window_size) if is_plotter(scene) else DEFAULT_WINDOW_SIZE
-    width, height = check_window_size(window_size)
-    if (
-        isinstance(supersample, bool)
-        or not isinstance(supersample, (int, np.integer))
-        or supersample < 1
-    ):
-        raise InputError(f"supersample: expected a positive integer, got {supersample!r}")
-    size = (width * int(supersample), height * int(supersample))
-    if max(size) > MAX_BUFFER_SIZE:
-        raise InputError(
-            f"window_size x supersample = {size[0]}x{size[1]} exceeds {MAX_BUFFER_SIZE} pixels "
-            "per side"
-        )
-    if not (0.0 <= float(feature_angle) <= 180.0):
+    width, height, supersample = check_capture_size(window_size, supersample)
+    size = (width * supersample, height * supersample)
+    if not (0.0 <= _validate.finite(feature_angle, "feature_angle") <= 180.0):
         raise InputError(f"feature_angle: expected degrees in [0, 180], got {feature_angle!r}")
     names = check_scalars(scalars)
 

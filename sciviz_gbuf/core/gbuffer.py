@@ -16,6 +16,7 @@ from zipfile import BadZipFile
 
 import numpy as np
 
+from .. import _validate
 from .._atomic import Part, atomic_output
 from .._validate import LIMITS
 from ..errors import InputError
@@ -120,9 +121,17 @@ class GBuffer:
         ``k x k`` samples, NaN samples left out (all-NaN stays NaN); a bool mask becomes
         fractional coverage. Integer images (ids) cannot be averaged: the sample nearest the
         block centre is taken.
+
+        ``supersample`` must be an integer in [1, ``LIMITS["supersample"]`` = 8] (a G-buffer
+        made by hand may carry anything there), and ``image`` a 2-D or 3-D array.
         """
-        k = self.supersample
+        k = _validate.count(self.supersample, "gb.supersample", "supersample")
         img = np.asarray(image)
+        if img.ndim not in (2, 3) or img.dtype.kind not in "biuf":
+            raise InputError(
+                f"image: expected an (H, W) or (H, W, C) numeric array, got shape {img.shape} "
+                f"dtype {img.dtype}"
+            )
         if img.shape[:2] != self.shape:
             raise InputError(
                 f"image: expected shape {self.shape} (this G-buffer), got {img.shape[:2]}"

@@ -73,8 +73,8 @@ def band_tables(
     base = _validate.finite(base, "base")
     land = _lut(HYPSOMETRIC if cmap is None else _validate.colormap(cmap, "cmap"))
     sea = _lut(BATHYMETRIC if sea_cmap is None else _validate.colormap(sea_cmap, "sea_cmap"))
-    lo = float(data.min()) if vmin is None else float(vmin)
-    hi = float(data.max()) if vmax is None else float(vmax)
+    lo = float(data.min()) if vmin is None else _validate.finite(vmin, "vmin")
+    hi = float(data.max()) if vmax is None else _validate.finite(vmax, "vmax")
     if not (np.isfinite(lo) and np.isfinite(hi) and lo <= hi):
         raise InputError(f"vmin, vmax: expected finite numbers with vmin <= vmax, got {lo}, {hi}")
     lv = mids = np.zeros(1)
@@ -82,7 +82,7 @@ def band_tables(
     if interval is not None:
         mode, q = _bk.INTERVAL, _validate.positive(interval, "interval")
     elif levels is not None:
-        mode, lv = _bk.LEVELS, _validate.levels(levels)
+        mode, lv = _bk.LEVELS, _validate.levels(levels, "levels", limit="bands")
         # Band k lies between edges[k] and edges[k + 1]; the outer bands are as wide as their
         # neighbours (or 1 when there is a single level).
         gap_lo = lv[1] - lv[0] if lv.size > 1 else 1.0
@@ -94,9 +94,7 @@ def band_tables(
     if sea_level is None:
         tab = (*_scale(lo, hi), 0.0, 0.0, np.nan)
     else:
-        s = float(sea_level)
-        if not np.isfinite(s):
-            raise InputError(f"sea_level: expected a finite number, got {sea_level!r}")
+        s = _validate.finite(sea_level, "sea_level")
         # Heights below the sea level take the sea colours, by the height itself: a band
         # never puts land under the sea.
         tab = (*_scale(s, max(hi, s)), *_scale(min(lo, s), s), s)
@@ -140,9 +138,10 @@ def color_bands(
         Heights (or any scalar); NaN/inf are nodata.
     interval : float > 0, optional
         Discrete bands ``[base + n q, base + (n + 1) q)``, each one colour (that of its
-        middle). Default: a continuous ramp.
+        middle). Default: a continuous ramp. (Not bounded: the band of a pixel is computed
+        from its height, so the work does not grow with the number of bands.)
     levels : sequence of float, optional
-        Band edges instead of a regular ``interval``.
+        Band edges instead of a regular ``interval``; at most ``LIMITS["bands"]`` = 4096.
     base : float, default: 0
         Offset of the regular bands.
     cmap : str or matplotlib Colormap, optional
@@ -188,6 +187,32 @@ def color_bands(
         return out
     _bk.band_image(v, valid, *tables, out)
     return out
+
+
+def _check_tables(tables: object) -> tuple:
+    """``tables`` as :func:`band_tables` makes them, checked so the kernel cannot read past
+    an array: a mode, two scalars, levels and band middles (one more than the levels), two
+    (n, 3) colour tables and the 5 ramp numbers."""
+    what = "tables: expected None or band_tables(...) of the map's options"
+    try:
+        mode, base, q, lv, mids, land, sea, tab = tables  # type: ignore[misc]
+        ok = isinstance(mode, (int, np.integer)) and not isinstance(mode, (bool, np.bool_))
+        ok = ok and int(mode) in (_bk.CONTINUOUS, _bk.INTERVAL, _bk.LEVELS)
+        lv = np.ascontiguousarray(lv, dtype=np.float64)
+        mids = np.ascontiguousarray(mids, dtype=np.float64)
+        land = np.ascontiguousarray(land, dtype=np.float32)
+        sea = np.ascontiguousarray(sea, dtype=np.float32)
+        tab = np.ascontiguousarray(tab, dtype=np.float32)
+        base, q = np.float32(_validate.finite(base, "base")), np.float32(q)
+    except (TypeError, ValueError, InputError, OverflowError):
+        raise InputError(f"{what}, got {_validate.brief(tables)}") from None
+    ok = ok and lv.ndim == 1 and lv.size >= 1 and mids.ndim == 1
+    ok = ok and mids.size >= (lv.size + 1 if int(mode) == _bk.LEVELS else 1)
+    ok = ok and all(t.ndim == 2 and t.shape[0] >= 1 and t.shape[1] == 3 for t in (land, sea))
+    ok = ok and tab.shape == (5,) and bool(np.isfinite(q) and q > 0)
+    if not ok:
+        raise InputError(f"{what}, got {_validate.brief(tables)}")
+    return (int(mode), base, q, lv, mids, land, sea, tab)
 
 
 def _chunked_bands(heights, mask, vmin, vmax, **params):
@@ -257,8 +282,13 @@ def composite_map(
     -------
     (H, W, 4) uint8 RGBA
     """
-    z = np.ascontiguousarray(heights, dtype=np.float32)
-    colours = tables
+    z = _validate.image(heights, "heights")
+    # The fused kernel indexes every layer and table without bounds checks: all are checked.
+    colours = None if tables is None else _check_tables(tables)
+    flat = _validate.positive(flat, "flat")
+    for name, a in (("relief", relief), ("shadow", shadow), ("sky", sky), ("ink", ink)):
+        if a is not None and np.shape(a) != z.shape:
+            raise InputError(f"{name}: expected shape {z.shape} (like heights), got {np.shape(a)}")
     if colours is None:  # no bands: white paper (the kernel ignores the tables)
         colours = band_tables(
             np.zeros(1, np.float32),
@@ -273,9 +303,9 @@ def composite_map(
         )
     empty = np.zeros((0, 0), np.float32)
 
-    def layer(a: np.ndarray | None) -> np.ndarray:
+    def layer(a: np.ndarray | None, name: str) -> np.ndarray:
         # contiguous float32 always: one compiled signature of the kernel, not one per layout
-        return empty if a is None else np.ascontiguousarray(a, dtype=np.float32)
+        return empty if a is None else _validate.image(a, name)
 
     out = np.empty((*z.shape, 4), dtype=np.uint8)
     _bk.map_image(
@@ -283,11 +313,11 @@ def composite_map(
         tables is not None,
         *colours,
         relief is not None,
-        layer(relief),
+        layer(relief, "relief"),
         np.float32(flat),
-        layer(shadow),
-        layer(sky),
-        layer(ink),
+        layer(shadow, "shadow"),
+        layer(sky, "sky"),
+        layer(ink, "ink"),
         _validate.rgb(ink_color, "ink_color"),
         out,
     )

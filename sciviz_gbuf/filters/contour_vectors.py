@@ -19,7 +19,8 @@ from ..errors import InputError
 
 __all__ = ["ContourPolyline", "contour_polylines", "polylines_to_geojson"]
 
-MAX_LEVELS = 100_000
+#: Most levels one call traces (``interval=`` or ``levels=``): ``LIMITS["levels"]``.
+MAX_LEVELS = int(_validate.LIMITS["levels"])
 
 
 class ContourPolyline(NamedTuple):
@@ -75,7 +76,8 @@ def contour_polylines(
     interval, levels, base, major_interval
         As in :func:`sciviz_gbuf.filters.contour_lines`: levels ``base + n * interval``
         within the field's range, or the explicit ``levels``; lines at multiples of
-        ``major_interval`` (from ``base``) are flagged ``major``.
+        ``major_interval`` (from ``base``) are flagged ``major``. At most
+        ``LIMITS["levels"]`` = 100000 levels either way (:data:`MAX_LEVELS`).
     mask : (H, W) bool, optional
         Coverage; lines are traced only between covered, finite pixels.
     transform : 6 floats, optional
@@ -93,17 +95,21 @@ def contour_polylines(
     m = _validate.mask(mask, s.shape)
     valid = np.isfinite(s) if m is None else np.isfinite(s) & m
     if transform is not None:
-        transform = tuple(float(v) for v in transform)
+        try:
+            transform = tuple(float(v) for v in transform)
+        except (TypeError, ValueError, OverflowError):
+            transform = (np.nan,)
         if len(transform) != 6 or not all(np.isfinite(transform)):
             raise InputError(f"transform: expected 6 finite numbers, got {transform!r}")
     base = _validate.finite(base, "base")
+    # explicit levels are counted (LIMITS["levels"]) before anything is traced
+    q = None if interval is None else _validate.positive(interval, "interval")
+    lv = None if levels is None else _validate.levels(levels)
+    major = None if major_interval is None else _validate.positive(major_interval, "major_interval")
     if not valid.any():
         return []
-    if interval is not None:
-        lv = _regular_levels(s[valid], _validate.positive(interval, "interval"), base)
-    else:
-        lv = _validate.levels(levels)
-    major = None if major_interval is None else _validate.positive(major_interval, "major_interval")
+    if q is not None:
+        lv = _regular_levels(s[valid], q, base)
     # find_contours must not see NaN: fill it (the mask keeps the fill out of every line).
     filled = np.where(valid, s, np.float32(s[valid].min()))
     out = []

@@ -50,13 +50,8 @@ RADIUS = 1
 FLAT_SPACING = 1000.0
 
 
-def _unit(value, name: str, *, allow_none: bool = False) -> float | None:
-    if value is None and allow_none:
-        return None
-    v = float(value)
-    if not (np.isfinite(v) and 0.0 <= v <= 1.0):
-        raise InputError(f"{name}: expected an ink value in [0, 1], got {value!r}")
-    return v
+def _unit(value, name: str) -> float:
+    return _validate.unit_interval(value, name)
 
 
 def _line_shape(d: float, ramp: float) -> tuple[float, float]:
@@ -69,9 +64,8 @@ def _line_shape(d: float, ramp: float) -> tuple[float, float]:
 
 
 def _params(width: float, profile: str) -> np.ndarray:
-    d = _validate.positive(width, "width")
-    if profile not in _PROFILES:
-        raise InputError(f"profile: expected one of {PROFILES}, got {profile!r}")
+    d = _validate.size(width, "width", "line_width", buffer=True)
+    profile = _validate.choice(profile, "profile", PROFILES)
     ramp, poly = _PROFILES[profile]
     prm = np.zeros(_p.NPRM, dtype=np.float64)
     prm[_p.LINE_A], prm[_p.LINE_CAP] = _line_shape(d, ramp)
@@ -132,10 +126,13 @@ def contour_lines(
         ``q`` of Eq. 12: lines at ``base + n * interval`` for every integer ``n``.
     levels : sequence of float, optional
         Explicit level values ``p`` (Eq. 7), instead of ``interval``; one of the two is needed.
+        At most ``LIMITS["levels"]`` = 100000 values.
     base : float, default: 0
         ``p0`` of Eq. 12.
-    width : float > 0, default: 1
-        Line width ``d`` in pixels, honoured wherever lines are further apart than that.
+    width : float in (0, 512], default: 1
+        Line width ``d`` in pixels, honoured wherever lines are further apart than that; at
+        most ``LIMITS["line_width"] * LIMITS["supersample"]`` = 512 (the field may be a
+        supersampled G-buffer channel: 64 output pixels at supersample 8).
     mask : (H, W) bool, optional
         Coverage; masked pixels get no ink.
     profile : {"linear", "smooth", "bilevel"}
@@ -153,15 +150,17 @@ def contour_lines(
         Eq. 15: ink of regions where lines crowd: 1 keeps them dark, 0 thins them out to the
         background, 0.5 gives a grey tone (Fig. 5). Default: no dense handling (crowded lines
         merge into solid ink), or 0 for the minor lines when ``major_interval`` is given.
-    dense_spacing : float > 0, optional
+    dense_spacing : float in (0, 8192], optional
         On-screen spacing (px) below which lines start to fade to ``c_dense``; they reach it
         one line width closer. Default ``2 * width``: lines are gone where they would touch.
-        ``dense_spacing=width`` is Eq. 15 exactly.
+        ``dense_spacing=width`` is Eq. 15 exactly. At most
+        ``LIMITS["spacing"] * LIMITS["supersample"]`` = 8192.
     major_interval : float > 0, optional
         A second, major family of lines at ``base + n * major_interval`` (Fig. 11, e.g. 20 m
         majors over 5 m minors); majors never thin out. Needs ``interval``.
-    major_width : float > 0, optional
-        Width of the major lines; default ``2 * width``.
+    major_width : float in (0, 512], optional
+        Width of the major lines; default ``2 * width``. At most
+        ``LIMITS["line_width"] * LIMITS["supersample"]`` = 512, as ``width``.
     gradient : (H, W) array, optional
         Your own gradient magnitude of ``field`` in field units per pixel, instead of Eq. 9.
 
@@ -180,6 +179,11 @@ def contour_lines(
     """
     if (interval is None) == (levels is None):
         raise InputError("contour_lines: give exactly one of interval= or levels=")
+    # Every parameter is checked before the field is touched (or a dask graph is built).
+    code, prm = _contour_params(
+        interval, levels, base, width, profile, g_eps, c_sparse, c_dense, dense_spacing,
+        major_interval, major_width,
+    )  # fmt: skip
     if _chunks.any_dask(field, mask, gradient):
         return _chunks.map_stencil(
             contour_lines,
@@ -198,6 +202,14 @@ def contour_lines(
             major_width=major_width,
         )
     s, m, g = _prepare(field, mask, gradient)
+    return _run(code, s, m, g, prm)
+
+
+def _contour_params(
+    interval, levels, base, width, profile, g_eps, c_sparse, c_dense, dense_spacing,
+    major_interval, major_width,
+) -> tuple[str, np.ndarray]:  # fmt: skip
+    """The checked parameters of :func:`contour_lines`: the kernel's code and ``prm``."""
     prm = _params(width, profile)
     d = 1 / prm[_p.INV_D]
     prm[_p.BASE] = _validate.finite(base, "base")
@@ -209,7 +221,9 @@ def contour_lines(
     if c_dense is not None:
         prm[_p.C_DENSE] = _unit(c_dense, "c_dense")
         dense = (
-            2 * d if dense_spacing is None else _validate.positive(dense_spacing, "dense_spacing")
+            2 * d
+            if dense_spacing is None
+            else _validate.size(dense_spacing, "dense_spacing", "spacing", buffer=True)
         )
         prm[_p.DENSE_AT] = dense
     elif dense_spacing is not None:
@@ -221,7 +235,11 @@ def contour_lines(
         gap = q
         if major_interval is not None:
             prm[_p.MAJOR_Q] = _validate.positive(major_interval, "major_interval")
-            mw = 2 * d if major_width is None else _validate.positive(major_width, "major_width")
+            mw = (
+                2 * d
+                if major_width is None
+                else _validate.size(major_width, "major_width", "line_width", buffer=True)
+            )
             prm[_p.MAJOR_A], prm[_p.MAJOR_CAP] = _line_shape(mw, _PROFILES[profile][0])
         elif major_width is not None:
             raise InputError("major_width: only used with major_interval=")
@@ -234,11 +252,11 @@ def contour_lines(
         gap = float(np.min(np.diff(lv))) if lv.size > 1 else 0.0
         prm = np.concatenate([prm, lv])
         code = "levels"
-    eps = gap / FLAT_SPACING if g_eps is None else float(g_eps)
+    eps = gap / FLAT_SPACING if g_eps is None else _validate.finite(g_eps, "g_eps")
     if not (np.isfinite(eps) and eps >= 0):
         raise InputError(f"g_eps: expected a finite number >= 0, got {g_eps!r}")
     prm[_p.INV_GEPS] = 1 / eps if eps > 0 else 1e30
-    return _run(code, s, m, g, prm)
+    return code, prm
 
 
 def hatching(
@@ -265,10 +283,13 @@ def hatching(
     ----------
     field : (H, W) array
         The scalar field whose level lines are the hatch lines (NaN/inf: masked).
-    spacing : float > 0, default: 8
-        ``d_i``: the on-screen spacing in pixels to keep; it stays within +-35%.
-    width : float > 0, default: 1
-        Line width ``d`` in pixels; keep it well below ``spacing``.
+    spacing : float in (0, 8192], default: 8
+        ``d_i``: the on-screen spacing in pixels to keep; it stays within +-35%. At most
+        ``LIMITS["spacing"] * LIMITS["supersample"]`` = 8192 (pixels of the field, which may
+        be a supersampled G-buffer channel).
+    width : float in (0, 512], default: 1
+        Line width ``d`` in pixels; keep it well below ``spacing``. At most
+        ``LIMITS["line_width"] * LIMITS["supersample"]`` = 512.
     mask : (H, W) bool, optional
     interval : float > 0, default: 1
         ``p_d``, the standard interval: lines are drawn at ``base + k * 2^n * interval``.
@@ -289,14 +310,14 @@ def hatching(
     -------
     (H, W) float32 ink in [0, 1]; 0 where masked, not finite or without a gradient.
     """
-    s, m, g = _prepare(field, mask, gradient)
     prm = _params(width, profile)
-    prm[_p.SPACING] = _validate.positive(spacing, "spacing")
+    prm[_p.SPACING] = _validate.size(spacing, "spacing", "spacing", buffer=True)
     prm[_p.Q] = _validate.positive(interval, "interval")
     prm[_p.BASE] = _validate.finite(base, "base")
-    fade = float(transition)
-    if not (np.isfinite(fade) and 0 < fade <= 1):
+    fade = _validate.finite(transition, "transition")
+    if not 0 < fade <= 1:
         raise InputError(f"transition: expected a number in (0, 1], got {transition!r}")
+    s, m, g = _prepare(field, mask, gradient)
     # Centre the fade on 4/3 (equal worst cases 4/3 and 2/3 of d_i) if it fits in (1, 2].
     prm[_p.SWITCH] = min(max(4 / 3, 1 + fade / 2), 2 - fade / 2)
     prm[_p.INV_FADE] = 1 / fade

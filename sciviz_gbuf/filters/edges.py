@@ -55,12 +55,22 @@ PROFILE_COLOR = (0.0, 0.0, 0.0)
 
 
 def _check_params(depth_jump: float, crease_angle: float, width: float) -> None:
-    if not (np.isfinite(depth_jump) and depth_jump > 0):
+    dj = _validate.finite(depth_jump, "depth_jump")
+    if not dj > 0:
         raise InputError(f"depth_jump: expected a number of pixel widths > 0, got {depth_jump!r}")
-    if not (np.isfinite(crease_angle) and 0 < crease_angle < 180):
+    ca = _validate.finite(crease_angle, "crease_angle")
+    if not 0 < ca < 180:
         raise InputError(f"crease_angle: expected degrees in (0, 180), got {crease_angle!r}")
-    if not (np.isfinite(width) and width >= 1):
-        raise InputError(f"width: expected a line width in output pixels >= 1, got {width!r}")
+    # The dilation costs about 3 * width * supersample passes over the buffer: bounded.
+    _validate.size(width, "width", "line_width", low=1.0, closed=True)
+
+
+def _check_gb(gb: object) -> GBuffer:
+    """:func:`check_gbuffer`, and a supersample the line dilation can afford (a G-buffer made
+    by hand may carry any number there)."""
+    gb = check_gbuffer(gb)
+    _validate.count(gb.supersample, "gb.supersample", "supersample")
+    return gb
 
 
 def _camera_terms(gb: GBuffer) -> tuple[bool, float, float]:
@@ -167,14 +177,14 @@ def profile_edges(
         larger than this many pixel footprints (pixel widths at that depth) starts a line; the
         ink ramps linearly to full at twice the value. Silhouettes against the background are
         always full ink.
-    width : float >= 1, default: 1
-        Line width in output pixels.
+    width : float in [1, 64], default: 1
+        Line width in output pixels, at most ``LIMITS["line_width"]`` = 64.
 
     Returns
     -------
     (H, W) float32 ink in [0, 1] at the output size (``gb.output_shape``).
     """
-    gb = check_gbuffer(gb)
+    gb = _check_gb(gb)
     _check_params(depth_jump, DEFAULT_CREASE_ANGLE, width)
     profile, _ = _pair_edges(gb, depth_jump, DEFAULT_CREASE_ANGLE, creases=False)
     return _finish(gb, profile, width=width)[0]
@@ -193,13 +203,14 @@ def internal_edges(
     by more than ``crease_angle`` degrees (between their normals, or in the depth's own
     cross-section, whichever is larger); the magnitude ramps from 0 at ``crease_angle`` to 1
     at 1.5 x ``crease_angle``, so it grows with the sharpness of the edge, as in the paper.
-    Draw positive values white and negative ones black for the 1990 Fig. 7 style.
+    Draw positive values white and negative ones black for the 1990 Fig. 7 style. ``width``:
+    line width in output pixels in [1, 64] (at most ``LIMITS["line_width"]`` = 64).
 
     Returns
     -------
     (H, W) float32 in [-1, 1] at the output size.
     """
-    gb = check_gbuffer(gb)
+    gb = _check_gb(gb)
     _check_params(depth_jump, crease_angle, width)
     _, crease = _pair_edges(gb, depth_jump, crease_angle)
     return _finish_signed(gb, crease, width)
@@ -214,9 +225,10 @@ def crease_edges(
 ) -> np.ndarray:
     """Crease lines: normal discontinuities sharper than ``crease_angle`` degrees (2003 §4).
 
-    The unsigned counterpart of :func:`internal_edges`: ink in [0, 1] at the output size.
+    The unsigned counterpart of :func:`internal_edges`: ink in [0, 1] at the output size;
+    ``width`` in [1, 64] output pixels (at most ``LIMITS["line_width"]`` = 64).
     """
-    gb = check_gbuffer(gb)
+    gb = _check_gb(gb)
     _check_params(depth_jump, crease_angle, width)
     _, crease = _pair_edges(gb, depth_jump, crease_angle)
     return _finish(gb, np.abs(crease), width=width)[0]
@@ -227,19 +239,16 @@ def id_edges(gb: GBuffer, *, ids: str = "object", width: float = 1.0) -> np.ndar
 
     Object-id lines outline each dataset of the scene, e.g. to restrict enhancement to one of
     them; ``ids="cell"`` draws the tessellation. The nearer pixel of a pair carries the line.
+    ``width``: in [1, 64] output pixels (at most ``LIMITS["line_width"]`` = 64).
 
     Returns
     -------
     (H, W) float32 ink in [0, 1] at the output size.
     """
-    gb = check_gbuffer(gb)
+    gb = _check_gb(gb)
     _check_params(DEFAULT_DEPTH_JUMP, DEFAULT_CREASE_ANGLE, width)
-    if ids == "object":
-        idimg = gb.object_id.astype(np.int64)
-    elif ids == "cell":
-        idimg = gb.cell_id.astype(np.int64)
-    else:
-        raise InputError(f"ids: expected 'object' or 'cell', got {ids!r}")
+    ids = _validate.choice(ids, "ids", ("object", "cell"))
+    idimg = (gb.object_id if ids == "object" else gb.cell_id).astype(np.int64)
     idimg = np.where(gb.mask, idimg, -1)
     out = np.empty(gb.shape, dtype=np.float32)
     _k.id_edge_kernel(
@@ -274,7 +283,8 @@ def edge_map(
         depth shows (see :func:`internal_edges`), for data whose normals are smoothed across
         real creases.
     crease_angle, depth_jump, width
-        As in :func:`internal_edges` and :func:`profile_edges`.
+        As in :func:`internal_edges` and :func:`profile_edges` (``width`` in [1, 64]:
+        at most ``LIMITS["line_width"]``).
 
     Returns
     -------
@@ -286,10 +296,9 @@ def edge_map(
     The paper averages the two diagonal cosines; that halves the response of an edge running
     along a diagonal (only one pair crosses it), so the smaller cosine is used instead.
     """
-    gb = check_gbuffer(gb)
+    gb = _check_gb(gb)
     _check_params(depth_jump, crease_angle, width)
-    if operator not in ("diagonal", "c1"):
-        raise InputError(f"operator: expected 'diagonal' or 'c1', got {operator!r}")
+    operator = _validate.choice(operator, "operator", ("diagonal", "c1"))
     parallel, inv_d, _ = _camera_terms(gb)
     h, w = gb.shape
     out = np.empty((h, w, 4), dtype=np.float32)

@@ -7,11 +7,10 @@ same gradient operators, shade formulas, border extrapolation and nodata substit
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from .. import _dask as _chunks
+from .. import _validate
 from ..errors import InputError
 from . import _hillshade_kernels as _k
 
@@ -36,10 +35,9 @@ def check_grid(heights: np.ndarray, dx: float, dy: float, z_factor: float) -> np
     if not np.issubdtype(z.dtype, np.number) or np.issubdtype(z.dtype, np.complexfloating):
         raise InputError(f"heights: expected real numbers, got dtype {z.dtype}")
     for name, value in (("dx", dx), ("dy", dy)):
-        if not (math.isfinite(float(value)) and float(value) > 0.0):
+        if not _validate.finite(value, name) > 0.0:
             raise InputError(f"{name}: expected a finite cell size > 0, got {value!r}")
-    if not math.isfinite(float(z_factor)):
-        raise InputError(f"z_factor: expected a finite number, got {z_factor!r}")
+    _validate.finite(z_factor, "z_factor")
     return z
 
 
@@ -147,14 +145,11 @@ def hillshade(
             variant=variant,
         )
     z = check_grid(heights, dx, dy, z_factor)
-    if not 0.0 <= float(altitude) <= 90.0:
+    if not 0.0 <= _validate.finite(altitude, "altitude") <= 90.0:
         raise InputError(f"altitude: expected degrees in [0, 90], got {altitude!r}")
-    if not math.isfinite(float(azimuth)):
-        raise InputError(f"azimuth: expected a finite number, got {azimuth!r}")
-    if algorithm not in _ALGORITHMS:
-        raise InputError(f"algorithm: expected one of {sorted(_ALGORITHMS)}, got {algorithm!r}")
-    if variant not in _VARIANTS:
-        raise InputError(f"variant: expected one of {sorted(_VARIANTS)}, got {variant!r}")
+    _validate.finite(azimuth, "azimuth")
+    algorithm = _validate.choice(algorithm, "algorithm", sorted(_ALGORITHMS))
+    variant = _validate.choice(variant, "variant", sorted(_VARIANTS))
     z32 = float32_heights(z, mask)  # the kernel only reads it
     # GDAL: inv_ewres = 1 / geotransform[1], inv_nsres = 1 / geotransform[5] (negative: north-up).
     return _k.hillshade_kernel(

@@ -20,6 +20,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from .. import _validate
 from ..core.gbuffer import GBuffer, check_gbuffer
 from ..errors import InputError
 from . import _reflection_kernels as _rk
@@ -69,8 +70,7 @@ def reflection_angle(
     """
     gb = check_gbuffer(gb)
     a = _unit(axis, "axis")
-    if mode not in MODES:
-        raise InputError(f"mode: expected one of {MODES}, got {mode!r}")
+    mode = _validate.choice(mode, "mode", MODES)
     return _theta(gb, a, mode, 0.0)
 
 
@@ -119,13 +119,11 @@ def _stripes(theta: np.ndarray, period: float, duty: float) -> np.ndarray:
 
 
 def _check_pattern(count: float, width: float, style: str, duty: float) -> None:
-    if not (np.isfinite(count) and count >= 1):
-        raise InputError(f"stripes: expected a number of lines >= 1 per turn, got {count!r}")
-    if not (np.isfinite(width) and width > 0):
-        raise InputError(f"width: expected a line width > 0 (output pixels), got {width!r}")
-    if style not in PATTERNS:
-        raise InputError(f"style: expected one of {PATTERNS}, got {style!r}")
-    if not 0.0 < duty < 1.0:
+    # One line per level of theta: as many as contour levels (LIMITS["levels"]).
+    _validate.size(count, "stripes", "levels", low=1.0, closed=True)
+    _validate.size(width, "width", "line_width")
+    _validate.choice(style, "style", PATTERNS)
+    if not 0.0 < _validate.finite(duty, "duty") < 1.0:
         raise InputError(f"duty: expected a fraction in (0, 1), got {duty!r}")
 
 
@@ -175,10 +173,11 @@ def reflection_lines(
         Any capture; the normals should be smooth (analytic patch normals are best).
     axis : 3 floats, default: (0, 0, 1)
         World direction of the lights (the cylinder axis of the paper).
-    stripes : float >= 1, default: 16
-        Lights per full turn around the axis: lines every ``360 / stripes`` degrees of theta.
-    width : float > 0, default: 1.5
-        Line width in output pixels (style ``"lines"``).
+    stripes : float in [1, 100000], default: 16
+        Lights per full turn around the axis: lines every ``360 / stripes`` degrees of theta;
+        at most ``LIMITS["levels"]`` = 100000.
+    width : float in (0, 64], default: 1.5
+        Line width in output pixels (style ``"lines"``); at most ``LIMITS["line_width"]`` = 64.
     style : {"lines", "stripes"}, default: "lines"
         Antialiased contour lines of theta, or alternating dark and light stripes ("zebra"),
         each stripe ``duty`` of a period wide.
@@ -196,11 +195,9 @@ def reflection_lines(
     """
     gb = check_gbuffer(gb)
     a = _unit(axis, "axis")
-    if mode not in MODES:
-        raise InputError(f"mode: expected one of {MODES}, got {mode!r}")
+    mode = _validate.choice(mode, "mode", MODES)
     _check_pattern(stripes, width, style, duty)
-    if not np.isfinite(phase):
-        raise InputError(f"phase: expected degrees, got {phase!r}")
+    phase = _validate.finite(phase, "phase")
     t = _theta(gb, a, mode, float(np.radians(phase)))
     return _pattern(gb, t, count=stripes, width=width, style=style, duty=duty)
 
@@ -230,11 +227,12 @@ def isophotes(
     light : 3 floats, default: (0, 0, 1)
         Direction towards the light; in eye space (default: a headlight) or world space.
     interval : float > 0, default: 10
-        Degrees between isophotes.
+        Degrees between isophotes, at least 180 / ``LIMITS["levels"]`` = 0.0018.
     levels : sequence of float, optional
-        Explicit ``N . L`` values instead of ``interval``.
-    width : float > 0, default: 1
-        Line width in output pixels.
+        Explicit ``N . L`` values instead of ``interval``; at most ``LIMITS["levels"]`` =
+        100000.
+    width : float in (0, 64], default: 1
+        Line width in output pixels; at most ``LIMITS["line_width"]`` = 64.
     frame : {"eye", "world"}, default: "eye"
         The frame of ``light``.
 
@@ -244,22 +242,25 @@ def isophotes(
     """
     gb = check_gbuffer(gb)
     lv = _unit(light, "light")
-    if frame not in ("eye", "world"):
-        raise InputError(f"frame: expected 'eye' or 'world', got {frame!r}")
-    if not (np.isfinite(width) and width > 0):
-        raise InputError(f"width: expected a line width > 0 (output pixels), got {width!r}")
+    frame = _validate.choice(frame, "frame", ("eye", "world"))
+    width = _validate.size(width, "width", "line_width")
     n = gb.normal if frame == "eye" else gb.world_normal()
     cos = np.clip(n.astype(np.float32) @ lv.astype(np.float32), -1.0, 1.0)
     angle = np.degrees(np.arccos(cos)).astype(np.float32)
     angle = np.where(gb.mask, angle, np.float32(np.nan))
     if levels is not None:
-        lv_cos = np.asarray(levels, dtype=np.float64).reshape(-1)
-        if lv_cos.size == 0 or not np.all(np.abs(lv_cos) <= 1.0):
-            raise InputError(f"levels: expected N.L values in [-1, 1], got {levels!r}")
+        lv_cos = _validate.levels(levels, "levels")  # at most LIMITS["levels"], finite
+        if not np.all(np.abs(lv_cos) <= 1.0):
+            raise InputError(f"levels: expected N.L values in [-1, 1], got {lv_cos.tolist()}")
         opts = {"levels": np.sort(np.degrees(np.arccos(lv_cos)))}
     else:
-        if not (np.isfinite(interval) and interval > 0):
-            raise InputError(f"interval: expected degrees > 0, got {interval!r}")
-        opts = {"interval": float(interval)}
+        # a level every `interval` degrees over [0, 180]: at most LIMITS["levels"] of them
+        step = _validate.positive(interval, "interval")
+        if not 180.0 / step <= _validate.LIMITS["levels"]:
+            raise InputError(
+                f"interval: expected at least {180.0 / _validate.LIMITS['levels']:g} degrees "
+                f"(LIMITS['levels'] isophotes over 180 degrees), got {interval!r}"
+            )
+        opts = {"interval": step}
     ink = contour_lines(angle, width=width * gb.supersample, mask=gb.mask, c_dense=1.0, **opts)
     return np.clip(np.nan_to_num(gb.downsample(np.where(gb.mask, ink, np.nan))), 0.0, 1.0)

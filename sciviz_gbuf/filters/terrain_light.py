@@ -16,6 +16,7 @@ import numpy as np
 from scipy import ndimage
 
 from .. import _dask as _chunks
+from .. import _validate
 from ..errors import InputError
 from . import _terrain_light_kernels as _k
 from .hillshade import check_grid, float32_heights
@@ -53,13 +54,24 @@ def sky_view_reach(radius: float, dx: float, dy: float) -> int:
     sample's interpolation neighbour lies across the other axis, which the ray crosses more
     slowly). The :func:`_local_max` box is wider, but it only bounds the cells the march reads,
     and a box cut at a chunk's halo still does."""
-    try:
-        r = float(radius)
-    except (TypeError, ValueError):
-        r = math.nan
-    if not (math.isfinite(r) and r > 0.0):
-        raise InputError(f"radius: expected a finite distance > 0 (metres), got {radius!r}")
+    r = _check_radius(radius, dx, dy)
     return max(1, math.floor(r / min(float(dx), float(dy)) * (1.0 + 1e-12)))
+
+
+def _check_radius(radius: object, dx: float, dy: float) -> float:
+    """``radius`` in metres, finite, > 0 and at most ``LIMITS["reach"]`` cells of the finer
+    axis (the march, the chunk halo and the local-maximum box all grow with it)."""
+    r = _validate.finite(radius, "radius")
+    if not r > 0.0:
+        raise InputError(f"radius: expected a finite distance > 0 (metres), got {radius!r}")
+    cells = r / min(float(dx), float(dy))
+    bound = _validate.LIMITS["reach"]
+    if not cells <= bound:
+        raise InputError(
+            f"radius: expected at most {bound:g} cells (LIMITS['reach']) of "
+            f"{min(float(dx), float(dy)):g} m, got {radius!r} m = {cells:.4g} cells"
+        )
+    return r
 
 
 def _which(step: float) -> int:
@@ -155,8 +167,7 @@ def cast_shadows(
         range.
     """
     for name, value in (("azimuth", azimuth), ("altitude", altitude), ("sun_radius", sun_radius)):
-        if not math.isfinite(float(value)):
-            raise InputError(f"{name}: expected a finite number, got {value!r}")
+        _validate.finite(value, name)
     if not 0.0 < float(altitude) <= 90.0:
         raise InputError(f"altitude: expected degrees in (0, 90], got {altitude!r}")
     limit = min(float(altitude), 90.0 - float(altitude))
@@ -214,11 +225,12 @@ def sky_view(
         Heights; row 0 is the north edge, column 0 the west edge. NaN and +-inf are nodata.
     dx, dy : float > 0, default: 1
         Cell size east-west and north-south, in the units of the heights (metres).
-    directions : int >= 1, default: 16
-        Number of horizon directions.
+    directions : int in [1, 360], default: 16
+        Number of horizon directions; at most ``LIMITS["directions"]`` = 360.
     radius : float > 0, optional
         Search distance in metres. Default: ``50 * max(dx, dy)``. Larger is more faithful in
         broad valleys and slower; the march also stops where no cell could raise the horizon.
+        At most ``LIMITS["reach"]`` = 4096 cells of the finer axis (``radius / min(dx, dy)``).
     z_factor : float, default: 1
         Vertical exaggeration.
     mask : (H, W) bool, optional
@@ -235,7 +247,8 @@ def sky_view(
     ------
     InputError
         ``heights`` not 2-D or ``mask`` of another shape; ``dx``/``dy``/``radius`` not finite and
-        positive; ``directions`` not an integer >= 1; non-finite ``z_factor``.
+        positive; ``directions`` not an integer in [1, 360]; ``radius`` beyond 4096 cells;
+        non-finite ``z_factor``.
 
     References
     ----------
@@ -243,13 +256,13 @@ def sky_view(
        technique. Remote Sensing 3(2), 398-415.
     .. [2] Morgan-Wall, T. rayshader: ``ambient_shade``. https://www.rayshader.com
     """
-    if isinstance(directions, bool) or not isinstance(directions, (int, np.integer)):
-        raise InputError(f"directions: expected an integer >= 1, got {directions!r}")
-    if int(directions) < 1:
-        raise InputError(f"directions: expected an integer >= 1, got {directions!r}")
+    directions = _validate.count(directions, "directions", "directions")
+    _prepare(np.zeros((3, 3), np.float32), dx, dy, z_factor, None)  # checks dx, dy first
+    if radius is None:
+        radius = 50.0 * max(float(dx), float(dy))
+    radius = _check_radius(radius, dx, dy)
     if _chunks.any_dask(heights, mask):
-        _prepare(np.zeros((3, 3), np.float32), dx, dy, z_factor, None)  # checks dx, dy first
-        reach = 50.0 * max(float(dx), float(dy)) if radius is None else radius
+        reach = radius
         return _chunks.map_stencil(
             sky_view,
             {"heights": heights, "mask": mask},
@@ -261,10 +274,6 @@ def sky_view(
             z_factor=z_factor,
         )
     z = _prepare(heights, dx, dy, z_factor, mask)
-    if radius is None:
-        radius = 50.0 * max(float(dx), float(dy))
-    if not (math.isfinite(float(radius)) and float(radius) > 0.0):
-        raise InputError(f"radius: expected a finite distance > 0 (metres), got {radius!r}")
     if z.size == 0:
         return z
     steps = [

@@ -38,6 +38,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .. import _validate
 from ..errors import InputError
 from . import _bezier
 from ._bezier import PatchEval
@@ -232,7 +233,9 @@ class PatchSet:
         Parameters
         ----------
         resolution : int or (int, int)
-            Grid intervals per patch, ``n`` or ``(nu, nv)``, each >= 1.
+            Grid intervals per patch, ``n`` or ``(nu, nv)``, each in [1, 4096] (at most
+            ``LIMITS["resolution"]``), and at most ``LIMITS["mesh_points"]`` = 2**24 grid
+            points over all patches.
 
         Returns
         -------
@@ -250,6 +253,15 @@ class PatchSet:
         import pyvista
 
         nu, nv = _resolution(resolution)
+        points = len(self) * (nu + 1) * (nv + 1)
+        if points > _validate.LIMITS["mesh_points"]:
+            raise InputError(
+                f"resolution: {nu}x{nv} per patch gives {points} points over {len(self)} "
+                f"patches; expected at most {_validate.LIMITS['mesh_points']:g} "
+                "(LIMITS['mesh_points'])"
+            )
+        # ~ points, normals, curvatures, uv and two triangles per point in float64 / int64
+        _validate.check_memory(points * _MESH_BYTES_PER_POINT, "resolution", "the tessellation")
         gu, gv = np.meshgrid(np.linspace(0, 1, nu + 1), np.linspace(0, 1, nv + 1), indexing="ij")
         uu, vv = gu.ravel(), gv.ravel()
         # Grid cell (a, b) -> corners in counter-clockwise (u, v) order, so winding ~ Su x Sv.
@@ -282,13 +294,20 @@ class PatchSet:
         return mesh
 
 
+# Bytes per grid point of a tessellation, its arrays and the PolyData copy of them.
+_MESH_BYTES_PER_POINT = 400
+
+
 def _resolution(resolution: Any) -> tuple[int, int]:
     pair = resolution if isinstance(resolution, (tuple, list)) else (resolution, resolution)
+    bound = int(_validate.LIMITS["resolution"])
     if len(pair) != 2 or not all(
-        isinstance(r, (int, np.integer)) and not isinstance(r, bool) and r >= 1 for r in pair
+        isinstance(r, (int, np.integer)) and not isinstance(r, bool) and 1 <= r <= bound
+        for r in pair
     ):
         raise InputError(
-            f"resolution must be an integer >= 1 or a pair of them, got {resolution!r}"
+            f"resolution: expected an integer in [1, {bound}] (LIMITS['resolution']) or a "
+            f"pair of them, got {_validate.brief(resolution)}"
         )
     return int(pair[0]), int(pair[1])
 
@@ -422,8 +441,9 @@ def parametric_mesh(surface: Any, resolution: int = 100) -> pyvista.PolyData:
         factory such as ``pv.ParametricTorus``, called with ``texture_coordinates=True``.
         ``pv.ParametricTorus()`` itself cannot be used: PyVista does not keep the
         parametric function, nor generate (u, v), so they cannot be recovered from it.
-    resolution : int
-        u and v resolution when tessellating a vtkParametricFunction.
+    resolution : int in [1, 4096], default: 100
+        u and v resolution when tessellating a vtkParametricFunction; at most
+        ``LIMITS["resolution"]`` = 4096.
 
     Returns
     -------
@@ -445,6 +465,7 @@ def parametric_mesh(surface: Any, resolution: int = 100) -> pyvista.PolyData:
     from vtkmodules.vtkCommonComputationalGeometry import vtkParametricFunction
 
     if isinstance(surface, vtkParametricFunction):
+        resolution = _validate.count(resolution, "resolution", "resolution")
         mesh = pyvista.surface_from_para(
             surface, u_res=resolution, v_res=resolution, texture_coordinates=True
         )

@@ -21,6 +21,7 @@ __all__ = [
     "CONTOUR_COLOR",
     "as_dem",
     "check_bands",
+    "check_line_sizes",
     "composite",
     "flat_shade",
     "lazy_dem",
@@ -66,6 +67,20 @@ def flat_shade(**opts) -> float:
     return float(hillshade(np.zeros((3, 3), np.float32), **opts)[1, 1])
 
 
+def check_line_sizes(
+    *, width: float, major_width: float, dense_spacing: float, profile_width: float | None = None
+) -> None:
+    """The line sizes of a map in output pixels, each within its bound, checked before any
+    work (the filters see them multiplied by the supersample, against a wider bound):
+    ``width``, ``major_width`` at most ``LIMITS["line_width"]``, ``dense_spacing`` at most
+    ``LIMITS["spacing"]``, ``profile_width`` in [1, ``LIMITS["line_width"]``]."""
+    _validate.size(width, "width", "line_width")
+    _validate.size(major_width, "major_width", "line_width")
+    _validate.size(dense_spacing, "dense_spacing", "spacing")
+    if profile_width is not None:
+        _validate.size(profile_width, "profile_width", "line_width", low=1.0, closed=True)
+
+
 def check_bands(bands, major: float):
     """``bands`` -> the ``interval=``/``levels=`` options of the band colours (empty for a
     continuous ramp), or None for no bands."""
@@ -93,8 +108,8 @@ def check_bands(bands, major: float):
     except (TypeError, ValueError):
         levels = np.array([np.nan])
     if levels.size == 0 or not np.isfinite(levels).all():
-        raise InputError(f"bands: expected finite band edges, got {bands!r}")
-    return {"levels": levels}
+        raise InputError(f"bands: expected finite band edges, got {_validate.brief(bands)}")
+    return {"levels": _validate.levels(levels, "bands", limit="bands")}
 
 
 def map_layers(

@@ -18,14 +18,22 @@ import numpy as np
 
 from .. import _validate
 from .._progress import progress
-from ..core.capture import capture
+from ..core.capture import capture, check_capture_size
 from ..core.framing import terrain_birdseye_camera
 from ..core.gbuffer import GBuffer
 from ..errors import InputError
 from ..filters import color_bands, contour_lines, lambert, profile_edges
 from ..readers import DEM
 from ._intervals import contour_intervals
-from ._map import CONTOUR_COLOR, as_dem, check_bands, lit, relief_light, rgba
+from ._map import (
+    CONTOUR_COLOR,
+    as_dem,
+    check_bands,
+    check_line_sizes,
+    lit,
+    relief_light,
+    rgba,
+)
 
 __all__ = [
     "PAPER",
@@ -75,10 +83,12 @@ def birdseye_gbuffer(
     view_angle : float, default: 30
         Vertical view angle of the perspective camera.
     window_size : (int, int), default: (1024, 768)
+        Each side at most ``LIMITS["image_side"]`` = 16384 (see :func:`~sciviz_gbuf.capture`).
     vert_exag : float, default: 1
         Vertical exaggeration of the surface (matplotlib's ``vert_exag``).
     supersample : int, default: 2
-        Render at this many times the size (antialiasing of every layer).
+        Render at this many times the size (antialiasing of every layer); at most
+        ``LIMITS["supersample"]`` = 8.
     step : int, optional
         Render every ``step``-th cell; default the smallest step giving at most about two
         million points.
@@ -89,15 +99,19 @@ def birdseye_gbuffer(
     GBuffer
         With scalar ``"elevation"`` (the true heights, not exaggerated).
     """
+    # the capture's size is checked before the DEM is read
+    w, h, _ = check_capture_size(window_size, supersample)
+    vert_exag = _validate.positive(vert_exag, "vert_exag")
+    if step is not None and not (
+        isinstance(step, (int, np.integer)) and not isinstance(step, bool) and step >= 1
+    ):
+        raise InputError(f"step: expected an integer >= 1, got {_validate.brief(step)}")
     d = as_dem(dem)
-    if not (np.isfinite(vert_exag) and vert_exag > 0):
-        raise InputError(f"vert_exag: expected a finite number > 0, got {vert_exag!r}")
     if not d.mask.any():
         raise InputError(f"{d.source or 'DEM'}: no valid heights to render")
     if step is None:
         step = max(1, int(np.ceil(np.sqrt(d.heights.size / _MAX_POINTS))))
     surface = d.to_pyvista(z_factor=vert_exag, step=step)
-    w, h = (int(v) for v in window_size)
     # Frame the valid ground only: hidden nodata points keep their place in the grid.
     pts = np.asarray(surface.points)[np.isfinite(surface.point_data["elevation"])]
     bounds = np.column_stack([pts.min(axis=0), pts.max(axis=0)]).ravel()
@@ -154,8 +168,16 @@ def birdseye_layers(
         ``cn`` contour ink, ``pr`` profile ink, ``sh`` relief shade (1 = lit by the sun at
         ``azimuth``/``altitude``), ``bands`` RGB colour bands (float32 (H, W, 3)), ``alpha``
         coverage, ``wz`` true height (NaN on the background), ``depth`` the eye distance
-        normalised to [0, 1] over the terrain (near 0), all float32.
+        normalised to [0, 1] over the terrain (near 0), all float32. Line sizes in output
+        pixels: ``width``, ``major_width``, ``profile_width`` at most ``LIMITS["line_width"]``
+        = 64, ``dense_spacing`` at most ``LIMITS["spacing"]`` = 1024.
     """
+    check_line_sizes(
+        width=width,
+        major_width=major_width,
+        dense_spacing=dense_spacing,
+        profile_width=profile_width,
+    )
     k = gb.supersample
     mask = gb.mask
     elev = np.where(mask, gb.scalars["elevation"], np.float32(np.nan))

@@ -23,7 +23,7 @@ import pyvista as pv
 from matplotlib.colors import LinearSegmentedColormap
 
 from .. import _validate
-from ..core.capture import capture
+from ..core.capture import capture, check_capture_size
 from ..core.framing import framed_camera
 from ..core.gbuffer import GBuffer
 from ..core.isosurface import isosurface
@@ -195,8 +195,9 @@ def ct_gbuffer(
     view_angle : float, default: 20
     progress_bar : bool, default: False
     """
+    # the capture's size is checked before the volume is read and its surface extracted
+    w, h, _ = check_capture_size(window_size, supersample)
     surface = ct_surface(source, iso=iso, progress_bar=progress_bar, **surface_options)
-    w, h = (int(v) for v in window_size)
     if camera is None:
         position, focal, up = view_camera(
             surface.points, view, view_angle=view_angle, aspect=w / max(h, 1)
@@ -251,16 +252,17 @@ def ct_layers(
         In world units (mm); default a round value giving about 24 lines over the surface.
     contour_width : float, default: 1
         Line width in output pixels; lines fade out where they crowd closer than three widths
-        (surfaces seen edge-on), which the profiles and shading show instead.
+        (surfaces seen edge-on), which the profiles and shading show instead. At most
+        ``LIMITS["line_width"]`` = 64.
     band_axis : {"x", "y", "z"}, optional
         World coordinate coloured in bands, near warm to far cool; default the horizontal axis
         (x or y) closest to the line of sight (``wy`` for the anterior view), or for views along
         z the one most upright in the picture.
     bands : int, float, sequence of float or None, default: 6
         About this many bands (int), bands of this width (float), explicit band edges, or None
-        for no bands (bone colour).
+        for no bands (bone colour). A count or edges: at most ``LIMITS["bands"]`` = 4096.
     profile_width : float, default: 1.5
-        Width of the profile lines in output pixels.
+        Width of the profile lines in output pixels, in [1, 64] (``LIMITS["line_width"]``).
     light : 3 floats
         Eye-space direction towards the light.
 
@@ -270,8 +272,8 @@ def ct_layers(
         ``sh`` shade (1 = lit), ``cn`` contour ink, ``pr`` profile ink, ``bands`` RGB
         (H, W, 3), ``shaded`` the conventional image (a) as RGB, ``alpha`` coverage; float32.
     """
-    if not (np.isfinite(contour_width) and contour_width > 0):
-        raise InputError(f"contour_width: expected a number > 0, got {contour_width!r}")
+    contour_width = _validate.size(contour_width, "contour_width", "line_width")
+    _validate.size(profile_width, "profile_width", "line_width", low=1.0, closed=True)
     k = gb.supersample
     mask = gb.mask
     cam = gb.camera
@@ -336,17 +338,13 @@ def _band_options(bands, values: np.ndarray) -> dict:
     if isinstance(bands, (bool, np.bool_)):
         raise InputError(f"bands: expected a count, a width, band edges or None, got {bands!r}")
     if isinstance(bands, (int, np.integer)):
-        if bands < 1:
-            raise InputError(f"bands: expected a count >= 1, got {bands!r}")
-        return {"interval": _interval(values[np.isfinite(values)], bands)}
+        n = _validate.count(bands, "bands", "bands")
+        return {"interval": _interval(values[np.isfinite(values)], n)}
     if isinstance(bands, (float, np.floating)):
         if not (np.isfinite(bands) and bands > 0):
             raise InputError(f"bands: expected a band width > 0, got {bands!r}")
         return {"interval": float(bands)}
-    edges = np.asarray(bands, dtype=np.float64).reshape(-1)
-    if edges.size < 1 or not np.isfinite(edges).all():
-        raise InputError(f"bands: expected finite band edges, got {bands!r}")
-    return {"levels": edges}
+    return {"levels": _validate.levels(bands, "bands", limit="bands")}
 
 
 def ct_panels(

@@ -18,7 +18,7 @@ import pyvista as pv
 
 from ..compose import colorize
 from ..core.camera import VIEWS
-from ..core.capture import capture
+from ..core.capture import capture, check_capture_size
 from ..core.framing import named_view_camera
 from ..core.gbuffer import GBuffer
 from ..errors import InputError
@@ -140,12 +140,14 @@ def surface_gbuffer(
         Anything :func:`~sciviz_gbuf.capture` accepts (``"iso"``, ``"xy"``, a camera...); the
         named views are framed tightly on the surface.
     resolution : int or (int, int), default: 32
-        Tessellation of each patch (per parameter direction).
+        Tessellation of each patch (per parameter direction), at most
+        ``LIMITS["resolution"]`` = 4096 and ``LIMITS["mesh_points"]`` = 2**24 points in all.
     window_size, supersample, parallel_projection, progress_bar
         As in :func:`~sciviz_gbuf.capture`.
     """
+    # the capture's size is checked before the surface is tessellated
+    w, h, _ = check_capture_size(window_size, supersample)
     mesh = _surface(source, resolution)
-    w, h = (int(v) for v in window_size)
     if isinstance(view, str) and view in VIEWS:
         view = named_view_camera(mesh.points, view, aspect=w / max(h, 1))
     wanted = [a for a in (*_CURVATURE_ARRAYS.values(), "patch_id") if a in mesh.array_names]

@@ -22,7 +22,7 @@ from .._progress import progress
 from ..errors import InputError
 from ..readers import DEM
 from ._intervals import contour_intervals, nice_intervals, typical_slope
-from ._map import CONTOUR_COLOR, as_dem, composite, map_layers
+from ._map import CONTOUR_COLOR, as_dem, check_line_sizes, composite, map_layers
 from .terrain_chunked import lazy_topographic_map
 
 __all__ = [
@@ -76,7 +76,7 @@ def topographic_map(
     contours : bool, default: True
         Draw contour lines at all.
     width, major_width : float, default: 1, 2
-        Line widths in pixels.
+        Line widths in pixels; each at most ``LIMITS["line_width"]`` = 64.
     dense_spacing : float, default: 4
         Minor lines fade out where they come closer than this many pixels (Eq. 15,
         ``c_dense`` = background for minors, = line for majors, as in Fig. 11).
@@ -114,6 +114,8 @@ def topographic_map(
         For anything :func:`read_dem` rejects, or an invalid parameter.
     """
     colour = _validate.rgb(contour_color, "contour_color")
+    # before the DEM is read
+    check_line_sizes(width=width, major_width=major_width, dense_spacing=dense_spacing)
     d = as_dem(dem)
     if not _dask.is_dask(d.mask) and not d.mask.any():
         # A fully transparent picture would look like success.

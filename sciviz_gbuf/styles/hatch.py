@@ -50,13 +50,13 @@ SPACES = ("screen", "uv")
 HATCH_SPACING = 6.0
 HATCH_ANGLES = (45.0, -45.0, 0.0, 90.0)
 # More families than this do not darken anything further and only cost time.
-_MAX_FAMILIES = 16
+_MAX_FAMILIES = int(_validate.LIMITS["families"])
 
 
 def _angles(value) -> np.ndarray:
     try:
         a = np.asarray(value, dtype=np.float64).reshape(-1)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise InputError(f"angles: expected a sequence of degrees, got {value!r}") from None
     if not 1 <= a.size <= _MAX_FAMILIES or not np.all(np.isfinite(a)):
         raise InputError(
@@ -200,23 +200,25 @@ def hatch(
         on-screen spacing varies with the parameterisation and foreshortening, and the stroke
         widths follow the local spacing (the gradient of the stroke coordinate, in pixels) so
         coverage still tracks the tone. Needs ``gb.uv``.
-    spacing : float > 0, default: 6
+    spacing : float in (0, 1024], default: 6
         Stroke spacing in output pixels (``"uv"``: the median spacing, when ``uv_scale`` is
-        not given).
+        not given); at most ``LIMITS["spacing"]`` = 1024.
     angles : sequence of 1-16 floats, default: (45, -45, 0, 90)
-        Stroke families in priority order: the first darkens the lightest tones.
-    max_width : float > 0, optional
+        Stroke families in priority order: the first darkens the lightest tones. At most
+        ``LIMITS["families"]`` = 16.
+    max_width : float in (0, 64], optional
         Cap on the stroke width in output pixels (``"uv"``: as a fraction of the local
         spacing, ``max_width / spacing``). Default: no cap, so the last family fills the paper
-        at ``t = 1``; with a cap the darkest tones stay hatched and coverage saturates.
+        at ``t = 1``; with a cap the darkest tones stay hatched and coverage saturates. At
+        most ``LIMITS["line_width"]`` = 64.
     uv_scale : float > 0, optional
         Strokes per unit of u or v (``"uv"`` only). Default: chosen so that the median
         on-screen spacing is ``spacing``.
     edges : bool, default: True
         Draw the profile edges (:func:`~sciviz_gbuf.filters.profile_edges`) in black on top,
         whatever ``ink`` is.
-    profile_width : float >= 1, default: 1
-        Their width in output pixels.
+    profile_width : float in [1, 64], default: 1
+        Their width in output pixels; at most ``LIMITS["line_width"]`` = 64.
     ink, paper : 3 floats in [0, 1]
         RGB of the strokes and of the paper (background).
 
@@ -230,20 +232,18 @@ def hatch(
         A bad parameter (named), or ``space="uv"`` without texture coordinates.
     """
     check_gbuffer(gb)
-    if space not in SPACES:
-        raise InputError(f"space: expected one of {SPACES}, got {space!r}")
-    k = gb.supersample
-    sp = (
-        _validate.positive(spacing, "spacing") * k
-    )  # buffer pixels: the strokes are drawn supersampled
+    space = _validate.choice(space, "space", SPACES)
+    k = _validate.count(gb.supersample, "gb.supersample", "supersample")
+    # buffer pixels: the strokes are drawn supersampled
+    sp = _validate.size(spacing, "spacing", "spacing") * k
     theta = _angles(angles)
-    cap_w = None if max_width is None else _validate.positive(max_width, "max_width") * k
+    cap_w = None if max_width is None else _validate.size(max_width, "max_width", "line_width") * k
     scale = None if uv_scale is None else _validate.positive(uv_scale, "uv_scale")
     if uv_scale is not None and space != "uv":
         raise InputError("uv_scale: only used with space='uv'")
-    pw = _validate.positive(profile_width, "profile_width")
-    if pw < 1:
-        raise InputError(f"profile_width: expected a width >= 1 pixel, got {profile_width!r}")
+    _validate.size(profile_width, "profile_width", "line_width", low=1.0, closed=True)
+    pw = float(profile_width)
+    edges = _validate.boolean(edges, "edges")
     ink_c, paper_c = _validate.rgb(ink, "ink"), _validate.rgb(paper, "paper")
     if space == "uv" and gb.uv is None:
         raise InputError("space: 'uv' needs texture coordinates, but gb.uv is None")

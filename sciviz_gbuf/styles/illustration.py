@@ -11,7 +11,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..core.gbuffer import GBuffer
+from .. import _validate
+from ..core.gbuffer import GBuffer, check_gbuffer
 from ..errors import InputError
 from ..filters import crease_edges, edge_map, enhance, internal_edges, lambert, profile_edges
 from .registry import check_style, register, styles_for
@@ -55,7 +56,8 @@ def shade_image(
     -------
     (H, W) float32 in [0, 1]; 1 (paper) on the background, blended at the silhouette.
     """
-    if not 0.0 < highlight <= 1.0:
+    gb = check_gbuffer(gb)
+    if not 0.0 < _validate.finite(highlight, "highlight") <= 1.0:
         raise InputError(f"highlight: expected a value in (0, 1], got {highlight!r}")
     shade = lambert(gb.normal, light=light, ambient=ambient)
     shade = np.where(gb.mask, np.float32(highlight) * shade, np.float32(1.0))
@@ -67,8 +69,7 @@ def signed_to_grey(values: np.ndarray, *, scale: float = 1.0) -> np.ndarray:
 
     NaN (background) is mid grey too.
     """
-    if not (np.isfinite(scale) and scale > 0):
-        raise InputError(f"scale: expected a finite number > 0, got {scale!r}")
+    scale = _validate.positive(scale, "scale")
     v = np.nan_to_num(np.asarray(values, dtype=np.float32), nan=0.0)
     return (0.5 + 0.5 * np.clip(v / np.float32(scale), -1.0, 1.0)).astype(np.float32)
 
@@ -122,7 +123,7 @@ def illustrate(
         the pair-wise profile and internal edges of :mod:`sciviz_gbuf.filters`).
     crease_angle, depth_jump, width
         As in :func:`sciviz_gbuf.filters.internal_edges` (degrees, pixel footprints, output
-        pixels).
+        pixels; ``width`` in [1, 64]: at most ``LIMITS["line_width"]``).
     light : 3 floats
         Eye-space direction towards the light of the shade.
 
@@ -131,6 +132,9 @@ def illustrate(
     (H, W, 3) float32 RGB in [0, 1]; ``edgemap``: (H, W, 4) RGBA.
     """
     style = check_style(style, "illustrate")
+    gb = check_gbuffer(gb)
+    # before any image is made (the edge filters check the rest)
+    _validate.size(width, "width", "line_width", low=1.0, closed=True)
     opts = {"crease_angle": crease_angle, "depth_jump": depth_jump, "width": width}
     if style in ("enhance", "edgemap"):
         emap = edge_map(gb, operator=operator, **opts)

@@ -108,27 +108,26 @@ def line_drawing(
         tone ``1 - sh`` exceeds :data:`TONE_FULL`, thinner lines in half-tones, fading to no
         ink below :data:`TONE_NONE` (see :func:`modulation`) — composed with ``pr``.
         Ink of overlapping lines is combined with ``max``.
-    spacing : float > 0, default: 6
-        ``d_i`` of Eq. 18-20: on-screen hatch spacing in output pixels.
-    width : float > 0, default: 1
-        Hatch line width in output pixels.
+    spacing : float in (0, 1024], default: 6
+        ``d_i`` of Eq. 18-20: on-screen hatch spacing in output pixels; at most
+        ``LIMITS["spacing"]`` = 1024.
+    width : float in (0, 64], default: 1
+        Hatch line width in output pixels; at most ``LIMITS["line_width"]`` = 64.
     light : 3 floats, default: ``LIGHT`` (upper left)
         Eye-space direction towards the light of ``sh``.
-    profile_width : float >= 1, default: 1.5
-        Width of the profile lines in output pixels.
+    profile_width : float in [1, 64], default: 1.5
+        Width of the profile lines in output pixels; at most ``LIMITS["line_width"]`` = 64.
 
     Returns
     -------
     (H, W) float32 grey in [0, 1] at ``gb.output_shape``; 1 is paper (also the background).
     """
     check_gbuffer(gb)
-    if combo not in COMBOS:
-        raise InputError(f"combo: expected one of {sorted(COMBOS)}, got {combo!r}")
-    sp = _validate.positive(spacing, "spacing")
-    wd = _validate.positive(width, "width")
-    pw = _validate.positive(profile_width, "profile_width")
-    if pw < 1:
-        raise InputError(f"profile_width: expected a width >= 1 pixel, got {profile_width!r}")
+    combo = _validate.choice(combo, "combo", sorted(COMBOS))
+    _validate.count(gb.supersample, "gb.supersample", "supersample")
+    sp = _validate.size(spacing, "spacing", "spacing")
+    wd = _validate.size(width, "width", "line_width")
+    pw = _validate.size(profile_width, "profile_width", "line_width", low=1.0, closed=True)
     needs_uv = "u" in combo or "v" in combo
     if needs_uv and gb.uv is None:
         raise InputError(f"combo: {combo!r} needs texture coordinates (u, v), but gb.uv is None")
@@ -186,12 +185,14 @@ def photocopy(
     ----------
     image : (H, W) or (H, W, C) array in [0, 1]
         Grey (1 = paper) or colour, copied per channel.
-    copies : int >= 0, default: 5
-        Generations (0 returns the image, clipped to [0, 1] and quantised to 8 bits).
-    blur : float >= 0, default: 0.5
+    copies : int in [0, 100], default: 5
+        Generations (0 returns the image, clipped to [0, 1] and quantised to 8 bits); at most
+        ``LIMITS["copies"]`` = 100.
+    blur : float in [0, 64], default: 0.5
         Toner spread in pixels. Lines narrower than about three times ``blur`` fade a little
         in each copy and lose their ends (blur + threshold is a curvature flow); with 1-pixel
-        lines ``blur`` above ~0.55 erases them within five copies.
+        lines ``blur`` above ~0.55 erases them within five copies. At most
+        ``LIMITS["blur"]`` = 64.
     pivot : float in (0, 1), default: 0.55
         Grey level where the tone curve is steepest.
     contrast : float > 0, default: 10
@@ -205,25 +206,28 @@ def photocopy(
     -------
     float32 array shaped like ``image``, in [0, 1], multiples of 1/255.
     """
-    img = np.asarray(image, dtype=np.float64)
+    copies = _validate.count(copies, "copies", "copies", low=0)
+    # the blur's kernel is 8 sigma wide: bounded like a line width
+    bl = _validate.size(blur, "blur", "blur", closed=True)
+    pv = _validate.finite(pivot, "pivot")
+    if not 0 < pv < 1:
+        raise InputError(f"pivot: expected a grey level in (0, 1), got {pivot!r}")
+    ct = _validate.positive(contrast, "contrast")
+    nz = _validate.finite(noise, "noise")
+    if not nz >= 0:
+        raise InputError(f"noise: expected a finite number >= 0, got {noise!r}")
+    if not (seed is None or (isinstance(seed, (int, np.integer)) and not isinstance(seed, bool))):
+        raise InputError(f"seed: expected None or an integer, got {_validate.brief(seed)}")
+    if seed is not None and seed < 0:
+        raise InputError(f"seed: expected an integer >= 0, got {seed!r}")
+    try:
+        img = np.asarray(image, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InputError(f"image: expected a numeric array, got {_validate.brief(image)}") from None
     if img.ndim not in (2, 3) or img.size == 0:
         raise InputError(f"image: expected an (H, W) or (H, W, C) array, got shape {img.shape}")
     if not np.all(np.isfinite(img)):
         raise InputError("image: contains NaN or inf")
-    if isinstance(copies, bool) or not isinstance(copies, (int, np.integer)) or copies < 0:
-        raise InputError(f"copies: expected an integer >= 0, got {copies!r}")
-    try:
-        bl, pv, ct, nz = float(blur), float(pivot), float(contrast), float(noise)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"blur/pivot/contrast/noise: expected numbers ({exc})") from None
-    if not (np.isfinite(bl) and bl >= 0):
-        raise InputError(f"blur: expected a finite number >= 0, got {blur!r}")
-    if not (np.isfinite(pv) and 0 < pv < 1):
-        raise InputError(f"pivot: expected a grey level in (0, 1), got {pivot!r}")
-    if not (np.isfinite(ct) and ct > 0):
-        raise InputError(f"contrast: expected a finite number > 0, got {contrast!r}")
-    if not (np.isfinite(nz) and nz >= 0):
-        raise InputError(f"noise: expected a finite number >= 0, got {noise!r}")
     rng = np.random.default_rng(seed)
     sigma = (bl, bl) + (0.0,) * (img.ndim - 2)  # blur across the page, not across channels
     out = np.round(np.clip(img, 0.0, 1.0) * 255.0) / 255.0

@@ -41,8 +41,8 @@ __all__ = [
     "toon",
 ]
 
-#: Largest shade texture :func:`toon` accepts (texels).
-MAX_LEVELS = 256
+#: Largest shade texture :func:`toon` accepts (texels): ``LIMITS["shade_levels"]``.
+MAX_LEVELS = int(_validate.LIMITS["shade_levels"])
 
 
 #: :func:`gooch` defaults (Gooch et al. 1998): base colour, warm and cool tones and how much of
@@ -199,7 +199,8 @@ def gooch(
     edges : bool, default: True
         Composite the 2003 edge map.
     operator, crease_angle, depth_jump, width
-        As in :func:`sciviz_gbuf.filters.edge_map`.
+        As in :func:`sciviz_gbuf.filters.edge_map` (``width`` in [1, 64] output pixels: at
+        most ``LIMITS["line_width"]``).
     inner_color, profile_color : RGB in [0, 1]
         Colours of inner (crease) edges and profiles.
     background : RGB in [0, 1], default: white
@@ -224,6 +225,8 @@ def gooch(
     )
     bg = _validate.rgb(background, "background")
     edges = _validate.boolean(edges, "edges")
+    if edges:  # before any image is made (edge_map checks the rest)
+        _validate.size(width, "width", "line_width", low=1.0, closed=True)
 
     k_cool = cool_c + a * base_c
     k_warm = warm_c + b * base_c
@@ -249,24 +252,24 @@ def _shade_table(levels: object, base: np.ndarray) -> np.ndarray:
         f"(n, 3) table of RGB colours in [0, 1]"
     )
     if isinstance(levels, (bool, np.bool_)):
-        raise InputError(f"levels: expected {expected}, got {levels!r}")
+        raise InputError(f"levels: expected {expected}, got {_validate.brief(levels)}")
     if isinstance(levels, (int, np.integer)):
         k = int(levels)
         if not 1 <= k <= MAX_LEVELS:
-            raise InputError(f"levels: expected {expected}, got {levels!r}")
+            raise InputError(f"levels: expected {expected}, got {_validate.brief(levels)}")
         # k shades evenly spaced in (0, 1]: 1/k (darkest) ... 1 (full base colour)
         shades = np.arange(1, k + 1, dtype=np.float64) / k
         return (shades[:, None] * base[None, :]).astype(np.float32)
     try:
         arr = np.asarray(levels, dtype=np.float64)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         arr = np.zeros((0,))
     ok_range = arr.size > 0 and bool(np.all((arr >= 0.0) & (arr <= 1.0)))
     if arr.ndim == 1 and 1 <= arr.size <= MAX_LEVELS and ok_range:
         return (arr[:, None] * base[None, :]).astype(np.float32)
     if arr.ndim == 2 and arr.shape[1] == 3 and 1 <= arr.shape[0] <= MAX_LEVELS and ok_range:
         return arr.astype(np.float32)
-    raise InputError(f"levels: expected {expected}, got {levels!r}")
+    raise InputError(f"levels: expected {expected}, got {_validate.brief(levels)}")
 
 
 def _smoothstep(x: np.ndarray) -> np.ndarray:
@@ -381,7 +384,7 @@ def toon(
         The shade texture. An int ``k``: shades ``1/k, 2/k, ..., 1`` times ``base``. A sequence
         of shades in [0, 1] (darkest first, for ``s`` from 0 to 1): multiplied by ``base``. An
         (n, 3) table: RGB colours in [0, 1] used as they are (``base`` is ignored). At most
-        :data:`MAX_LEVELS` texels.
+        :data:`MAX_LEVELS` = ``LIMITS["shade_levels"]`` = 256 texels.
     base : RGB in [0, 1], default: orange
         Fully lit material colour.
     smooth : float in [0, 1], default: 0
@@ -389,7 +392,8 @@ def toon(
     edges : bool, default: True
         Composite the 2003 edge map.
     operator, crease_angle, depth_jump, width
-        As in :func:`sciviz_gbuf.filters.edge_map`.
+        As in :func:`sciviz_gbuf.filters.edge_map` (``width`` in [1, 64] output pixels: at
+        most ``LIMITS["line_width"]``).
     inner_color : RGB in [0, 1] or None, default: black
         Colour of inner (crease) edges; None draws no inner edges.
     profile_color : RGB in [0, 1], default: black
@@ -412,6 +416,8 @@ def toon(
     prof_c = _validate.rgb(profile_color, "profile_color")
     bg = _validate.rgb(background, "background")
     edges = _validate.boolean(edges, "edges")
+    if edges:  # before any image is made (edge_map checks the rest)
+        _validate.size(width, "width", "line_width", low=1.0, closed=True)
 
     rgb = _finish(gb, _toon_colour(gb, lv, table, sm, bg))
     if not edges:
