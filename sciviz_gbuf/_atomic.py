@@ -39,6 +39,7 @@ __all__ = [
     "Interrupted",
     "Part",
     "atomic_output",
+    "native_stderr",
     "one_line",
     "output_group",
     "raising_signals",
@@ -181,6 +182,16 @@ def _fd2_captured(box: list[str]) -> Iterator[None]:
                 os.close(sink)
             if data.strip():
                 box.append(data.decode("utf-8", errors="replace"))
+
+
+@contextmanager
+def native_stderr() -> Iterator[list[str]]:
+    """Capture what native libraries (VTK, GDAL) print to file descriptor 2 inside the block,
+    for readers to fold into their one-line errors: the yielded list holds the text once the
+    block has ended. Python's own ``sys.stderr`` is not captured."""
+    box: list[str] = []
+    with _fd2_captured(box):
+        yield box
 
 
 def _bypass(saved: int):

@@ -200,7 +200,7 @@ def finite(value: object, name: str) -> float:
     """A finite float."""
     try:
         v = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise InputError(f"{name}: expected a finite number, got {brief(value)}") from None
     if not np.isfinite(v):
         raise InputError(f"{name}: expected a finite number, got {brief(value)}")
@@ -211,7 +211,7 @@ def positive(value: object, name: str) -> float:
     """A finite float > 0."""
     try:
         v = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise InputError(f"{name}: expected a finite number > 0, got {brief(value)}") from None
     if not (np.isfinite(v) and v > 0):
         raise InputError(f"{name}: expected a finite number > 0, got {brief(value)}")
@@ -222,7 +222,7 @@ def number_in(value: object, name: str, low: float, high: float = np.inf) -> flo
     """A float in the closed interval ``[low, high]`` (booleans are refused)."""
     try:
         v = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         v = np.nan
     if isinstance(value, (bool, np.bool_)) or not (low <= v <= high):
         raise InputError(f"{name}: expected a number in [{low}, {high}], got {brief(value)}")
@@ -233,7 +233,7 @@ def unit_interval(value: object, name: str) -> float:
     """A float in [0, 1]."""
     try:
         v = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         v = float("nan")
     if isinstance(value, (bool, np.bool_)) or not 0.0 <= v <= 1.0:
         raise InputError(f"{name}: expected a number in [0, 1], got {brief(value)}")
@@ -258,7 +258,7 @@ def rgb(value: object, name: str) -> np.ndarray:
     """An RGB colour: three finite floats in [0, 1], as float32 ``(3,)``."""
     try:
         c = np.asarray(value, dtype=np.float64).reshape(-1)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         c = np.zeros(0)
     if c.size != 3 or not np.all(np.isfinite(c)) or c.min() < 0 or c.max() > 1:
         raise InputError(f"{name}: expected an RGB triple of floats in [0, 1], got {brief(value)}")

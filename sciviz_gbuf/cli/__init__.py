@@ -7,6 +7,7 @@ import argparse
 import sys
 import warnings
 from collections.abc import Sequence
+from typing import NoReturn
 
 from .. import __version__
 from .._atomic import Interrupted, one_line, output_group, raising_signals
@@ -36,9 +37,18 @@ COMMANDS = (
 )
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with the package's one-line errors: a bad option prints one line naming it
+    (``sciviz-gbuf topo: error: argument --width: ...``) and exits 2, without the usage block
+    (``--help`` still shows it)."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {one_line(message)}\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (exposed for documentation and tests)."""
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="sciviz-gbuf",
         description="Comprehensible rendering of 3-D shapes with G-buffers (PyVista/VTK).",
     )

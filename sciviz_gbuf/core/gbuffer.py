@@ -17,7 +17,7 @@ from zipfile import BadZipFile
 import numpy as np
 
 from .. import _validate
-from .._atomic import Part, atomic_output
+from .._atomic import Part, atomic_output, native_stderr, one_line
 from .._validate import LIMITS
 from ..errors import InputError
 from ._block_mean_kernels import block_mean
@@ -290,12 +290,7 @@ class GBuffer:
                 raise InputError(f"{p}: not a sciviz_gbuf G-buffer (no {META_KEY!r} record)")
             return cls._from_arrays(arrays, str(arrays.pop(META_KEY)), str(p))
         if suffix == ".vti":
-            import pyvista as pv
-
-            try:
-                img = pv.read(p)
-            except Exception as exc:  # VTK readers raise many types
-                raise InputError(f"{p}: cannot read as VTK image ({exc})") from exc
+            img = _read_vti(p)
             return cls.from_pyvista(img, source=str(p))
         raise InputError(f"{p}: G-buffers are loaded from .npz or .vti, not {suffix!r}")
 
@@ -330,6 +325,36 @@ class GBuffer:
             arrays[name] = a.reshape(h, w, *a.shape[1:])[::-1]
         meta = image.field_data[META_KEY]
         return cls._from_arrays(arrays, str(meta[0]), source)
+
+
+def _read_vti(path: Path):
+    """A ``.vti`` file as a ``pyvista.ImageData``, or an InputError naming it.
+
+    VTK's XML reader reports a damaged file only to its log (through PyVista's output window,
+    coloured, several lines) and returns an empty image: the log is switched off for the read
+    and the outcome judged from the reader's error code and output instead."""
+    import pyvista as pv
+    from vtkmodules.vtkCommonCore import vtkObject
+    from vtkmodules.vtkIOXML import vtkXMLImageDataReader
+
+    reader = vtkXMLImageDataReader()
+    shown = vtkObject.GetGlobalWarningDisplay()
+    vtkObject.GlobalWarningDisplayOff()
+    try:
+        with native_stderr() as logged:
+            ok = reader.CanReadFile(str(path))
+            if ok:
+                reader.SetFileName(str(path))
+                reader.Update()
+    except UnicodeError as exc:  # VTK takes UTF-8 file names only
+        raise InputError(f"{path}: VTK cannot open a file whose name is not UTF-8") from exc
+    finally:
+        vtkObject.SetGlobalWarningDisplay(shown)
+    image = reader.GetOutput() if ok else None
+    if not ok or reader.GetErrorCode() != 0 or image is None or image.GetNumberOfPoints() == 0:
+        detail = f" ({one_line(' '.join(logged))})" if logged else ""
+        raise InputError(f"{path}: not a readable VTK XML image (.vti){detail}")
+    return pv.wrap(image)
 
 
 def _check_camera(cam: CameraInfo, path: str) -> None:
