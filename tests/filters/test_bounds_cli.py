@@ -33,9 +33,15 @@ def inputs(tmp_path_factory):
 
 
 # (command, input file, extra arguments, output name, the parameter the message must name).
-# Values below a lower bound (width nan/0.5/-1, supersample 0, levels 0) are refused by the
-# command line's argparse types first, with a usage block (several lines): not here.
+# Values below a lower bound are refused by the command line's own option types (one line too).
 CASES = [
+    ("edges", "ball.vtp", ["--width", "nan"], "e.png", "--width"),
+    ("edges", "ball.vtp", ["--width", "0.5"], "e.png", "--width"),
+    ("edges", "ball.vtp", ["--width", "-1"], "e.png", "--width"),
+    ("edges", "ball.vtp", ["--supersample", "0"], "e.png", "--supersample"),
+    ("mesh", "ball.vtp", ["--levels", "0"], "m.png", "--levels"),
+    ("topo", "hill.asc", ["--width", "nan"], "t.png", "--width"),
+    ("topo", "hill.asc", ["--major-width", "-2"], "t.png", "--major-width"),
     ("edges", "ball.vtp", ["--width", "1e4"], "e.png", "width"),
     ("edges", "ball.vtp", ["--width", "65"], "e.png", "width"),
     ("edges", "ball.vtp", ["--supersample", "9"], "e.png", "supersample"),
