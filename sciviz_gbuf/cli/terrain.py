@@ -15,7 +15,13 @@ from ..errors import InputError
 from ..readers import read_dem
 from ..recipes.birdseye import birdseye_gbuffer, birdseye_panels, sumi_e
 from ..recipes.terrain import topographic_map
-from ..writers.cog import local_client, write_cog
+from ..writers.cog import (
+    check_chunk_memory,
+    check_worker_memory,
+    killed_worker_error,
+    local_client,
+    write_cog,
+)
 from ._args import add_progress, number, png_output, positive_int, show_progress, size
 
 __all__ = ["add_birdseye", "add_topo"]
@@ -172,9 +178,20 @@ def _topo_out_of_core(args: argparse.Namespace, source, out: Path, show: bool, t
         raise InputError("dem: out of core (--chunks/--dask) needs DEM file(s) to read")
     # Read (metadata only) before a cluster starts: a bad file fails fast.
     dem = read_dem(source, chunks=args.chunks or 2048)
+    block = tuple(int(v) for v in dem.heights.chunksize)
     client = None
     if args.dask == "local":
-        client = local_client(args.workers or 2, memory_limit=args.memory_limit or "3GB")
+        from dask.utils import parse_bytes
+
+        limit = args.memory_limit or "3GB"
+        try:
+            limit_bytes = parse_bytes(limit)
+        except (ValueError, TypeError):
+            raise InputError(
+                f"--memory-limit: expected a size such as 3GB, got {limit!r}"
+            ) from None
+        check_chunk_memory(block, limit_bytes)  # before any worker starts
+        client = local_client(args.workers or 2, memory_limit=limit)
     elif args.dask is not None:
         from distributed import Client
 
@@ -185,6 +202,8 @@ def _topo_out_of_core(args: argparse.Namespace, source, out: Path, show: bool, t
                 f"--dask: cannot connect to a dask scheduler at {args.dask!r} ({exc})"
             ) from exc
     try:
+        if client is not None:
+            check_worker_memory(client, block)
         # While open, the Client is dask's default scheduler: the map's whole-grid reductions
         # (colour range, contour interval) run on the cluster too.
         rgba = topographic_map(dem, **_topo_options(args, show))
@@ -197,6 +216,11 @@ def _topo_out_of_core(args: argparse.Namespace, source, out: Path, show: bool, t
             client=client,
             progress_bar=show,
         )
+    except Exception as exc:
+        # dask's KilledWorker (a task that killed its workers): the memory limit, in one line
+        if type(exc).__name__ == "KilledWorker":
+            raise killed_worker_error(block) from exc
+        raise
     finally:
         if client is not None:
             cluster = client.cluster if args.dask == "local" else None

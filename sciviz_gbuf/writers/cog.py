@@ -26,7 +26,14 @@ from ..errors import InputError, SciVizGBufError
 from .geotiff import check_tiff, gdal_writing, georeference, rasterio_crs, uint8_profile
 from .png import to_uint8, write_png
 
-__all__ = ["local_client", "write_cog"]
+__all__ = [
+    "BYTES_PER_MAP_CELL",
+    "check_chunk_memory",
+    "check_worker_memory",
+    "killed_worker_error",
+    "local_client",
+    "write_cog",
+]
 
 #: COG tile edge (GDAL's default for the COG driver).
 BLOCK = 512
@@ -454,18 +461,74 @@ def _compute_distributed(image, writer: _WindowWriter, client: Any) -> None:
     as fast as blocks finish) and in this process because writing a block takes far less
     time than computing one.
     """
-    from distributed import as_completed
+    from distributed import KilledWorker, as_completed
 
+    check_worker_memory(client, _block_shape(image))
     items = list(_block_slices(image))
     futures = client.compute([image.blocks[i, j] for (i, j), _ in items])
     where = {f.key: slices for f, (_, slices) in zip(futures, items, strict=True)}
     queue = as_completed(futures)
     del futures  # the queue holds them; each is released once its block is written
-    for future in queue:
-        block = future.result()
-        writer[where.pop(future.key)] = block
-        future.release()
-        del block
+    try:
+        for future in queue:
+            block = future.result()
+            writer[where.pop(future.key)] = block
+            future.release()
+            del block
+    except KilledWorker as exc:
+        # A task that killed its workers (dask's allowed-failures, 3 by default): almost always
+        # the memory limit. Say so instead of dask's task key.
+        raise killed_worker_error(_block_shape(image)) from exc
+
+
+#: Bytes a worker needs per map cell of a block (an estimate, used only to refuse a hopeless
+#: memory limit at once): about ten float32 layers (heights and their halo copy, filled
+#: heights, relief, contour ink, sky view, gradients), the RGBA result and dask's copies of
+#: inputs and outputs, with a margin.
+BYTES_PER_MAP_CELL = 60
+
+
+def _block_shape(image) -> tuple[int, int]:
+    return max(image.chunks[0]), max(image.chunks[1])
+
+
+def killed_worker_error(block: tuple[int, int]) -> InputError:
+    """The one-line error for dask's ``KilledWorker``: a task killed every worker that tried it
+    (``distributed.scheduler.allowed-failures`` times), almost always the memory limit."""
+    import dask
+
+    tries = int(dask.config.get("distributed.scheduler.allowed-failures", 3)) + 1
+    return InputError(
+        f"memory limit: dask workers died {tries} times on one task with chunks of "
+        f"{block[0]}x{block[1]} cells: use smaller chunks (--chunks) or a larger --memory-limit"
+    )
+
+
+def check_worker_memory(client: Any, block: tuple[int, int]) -> None:
+    """Refuse at once a cluster whose workers' memory limit cannot hold one block of ``block``
+    = (rows, columns) cells: dask would otherwise restart them again and again (a task that
+    kills its worker is retried on the next one)."""
+    try:
+        workers = client.scheduler_info().get("workers", {})
+        limits = [w.get("memory_limit") or 0 for w in workers.values()]
+    except Exception:  # a scheduler that does not report it: no check
+        return
+    limits = [m for m in limits if m > 0]
+    if limits:
+        check_chunk_memory(block, min(limits))
+
+
+def check_chunk_memory(block: tuple[int, int], limit: int) -> None:
+    """InputError if one map block of ``block`` = (rows, columns) cells does not fit in a
+    worker memory limit of ``limit`` bytes (see :data:`BYTES_PER_MAP_CELL`)."""
+    h, w = block
+    need = h * w * BYTES_PER_MAP_CELL
+    if need > limit:
+        raise InputError(
+            f"memory limit: chunks of {h}x{w} cells need about {need / 2**20:.0f} MB on a "
+            f"worker, the workers are limited to {limit / 2**20:.0f} MB: use smaller "
+            "chunks (--chunks) or a larger --memory-limit"
+        )
 
 
 def _compute_batches(image, writer: _WindowWriter, scheduler: Any) -> None:
