@@ -34,6 +34,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .. import _validate
 from .._progress import progress
 from ..errors import InputError
 from ._dicom_geometry import (
@@ -635,25 +636,10 @@ def _read_volume(
     return volume, slopes, intercepts, n_padding
 
 
-def _available_memory() -> int | None:
-    """Bytes of memory available to a new allocation (Linux's MemAvailable), if known."""
-    try:
-        with open("/proc/meminfo", encoding="ascii") as f:
-            for line in f:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
-    except (OSError, ValueError, IndexError):
-        pass
-    try:
-        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
-    except (ValueError, OSError, AttributeError):
-        return None
-
-
 def _check_volume_memory(n: int, rows: int, cols: int, h: _Header) -> None:
     """The float64 volume (and its float32 copy) must fit in the memory available now."""
     need = n * rows * cols * (8 + 4)
-    have = _available_memory()
+    have = _validate.available_memory()
     if have is not None and need > have:
         raise DicomSeriesError(
             f"{h.name}: {n} slices of {rows}x{cols} need {need / 2**30:.1f} GiB, only "
