@@ -6,6 +6,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from .. import _validate
 from ..errors import InputError
 
 __all__ = ["lambert"]
@@ -38,19 +39,19 @@ def lambert(
         1 is fully lit (a shade, not ink).
     """
     n = np.asarray(normal)
-    if n.ndim != 3 or n.shape[2] != 3:
-        raise InputError(f"normal: expected an (H, W, 3) array, got shape {n.shape}")
-    lv = np.asarray(light, dtype=np.float64).reshape(-1)
+    if n.ndim != 3 or n.shape[2] != 3 or not np.issubdtype(n.dtype, np.number):
+        raise InputError(f"normal: expected an (H, W, 3) array of numbers, got {n.dtype} {n.shape}")
+    try:
+        lv = np.asarray(light, dtype=np.float64).reshape(-1)
+    except (TypeError, ValueError, OverflowError):
+        lv = np.zeros(0)
     if lv.size != 3 or not np.isfinite(lv).all() or not np.linalg.norm(lv) > 0:
-        raise InputError(f"light: expected a finite non-zero 3-vector, got {light!r}")
-    if not 0.0 <= float(ambient) <= 1.0:
-        raise InputError(f"ambient: expected a value in [0, 1], got {ambient!r}")
+        raise InputError(f"light: expected a finite non-zero 3-vector, got {light!r:.80}")
+    ambient = _validate.unit_interval(ambient, "ambient")
+    m = _validate.mask(mask, n.shape[:2])
     lv = (lv / np.linalg.norm(lv)).astype(np.float32)
     shade = np.maximum(n.astype(np.float32, copy=False) @ lv, np.float32(0.0))
     shade = np.float32(ambient) + np.float32(1.0 - ambient) * shade
-    if mask is not None:
-        m = np.asarray(mask, dtype=bool)
-        if m.shape != n.shape[:2]:
-            raise InputError(f"mask: expected shape {n.shape[:2]}, got {m.shape}")
+    if m is not None:
         shade = np.where(m, shade, np.float32(np.nan))
     return np.clip(shade, 0.0, 1.0).astype(np.float32, copy=False)
