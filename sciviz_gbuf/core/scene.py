@@ -20,10 +20,25 @@ from vtkmodules.vtkFiltersCore import vtkPolyDataNormals, vtkTriangleFilter
 from vtkmodules.vtkFiltersGeometry import vtkDataSetSurfaceFilter, vtkGeometryFilter
 
 from ..errors import InputError
+from ..readers.mesh import check_mesh, quiet_vtk, source_name
 
-__all__ = ["Surface", "collect_surfaces", "is_plotter", "make_surface", "scene_items"]
+__all__ = [
+    "MAX_COORDINATE",
+    "MIN_RELATIVE_EXTENT",
+    "Surface",
+    "collect_surfaces",
+    "is_plotter",
+    "make_surface",
+    "scene_items",
+]
 
 _CELL_ID = "__sciviz_gbuf_cell_id"
+
+#: Largest coordinate magnitude the float32 rasteriser handles (its squares still fit).
+MAX_COORDINATE = 1e30
+#: Smallest extent of a scene relative to its distance from the origin: below it the float32
+#: vertex positions the rasteriser sees are too coarse to draw the shape (a blank picture).
+MIN_RELATIVE_EXTENT = 1e-4
 
 
 @dataclass
@@ -95,7 +110,8 @@ def scene_items(scene: object) -> list[tuple[str, object, np.ndarray | None]]:
                 continue
             m = actor.GetMatrix()
             mat = np.array([[m.GetElement(i, j) for j in range(4)] for i in range(4)])
-            items.append((f"actor {key!r}", data, None if np.allclose(mat, np.eye(4)) else mat))
+            name = source_name(data) or f"actor {key!r}"
+            items.append((name, data, None if np.allclose(mat, np.eye(4)) else mat))
         if not items:
             raise InputError("scene: the Plotter has no visible actor with a dataset to capture")
         return items
@@ -114,23 +130,23 @@ def scene_items(scene: object) -> list[tuple[str, object, np.ndarray | None]]:
     for i, ds in enumerate(seq):
         if not isinstance(ds, (vtkDataSet, vtkMultiBlockDataSet)):
             raise InputError(f"scene[{i}]: expected a PyVista/VTK dataset, got {type(ds).__name__}")
-        items.append((f"dataset {i} ({type(ds).__name__})", ds, None))
+        items.append((source_name(ds) or f"dataset {i} ({type(ds).__name__})", ds, None))
     return items
 
 
-def _surface_polydata(name: str, data: object) -> pv.PolyData:
-    """Polygonal surface of any dataset with a cell-id array tracing back to ``data``."""
+def _surface_polydata(name: str, data: object) -> pv.PolyData | None:
+    """Polygonal surface of any dataset with a cell-id array tracing back to ``data``; None
+    if it has cells but no surface (only lines or vertices: left out of the picture)."""
+    # Before any VTK filter: they index the points with whatever the connectivity holds.
+    check_mesh(data, name)
     ds = pv.wrap(data)
     if isinstance(ds, pv.MultiBlock):
-        ds = ds.combine(merge_points=False)
+        with quiet_vtk():
+            ds = ds.combine(merge_points=False)
         if ds is None or ds.n_cells == 0:
             raise InputError(f"{name}: the MultiBlock has no cells to capture")
     if ds.n_points == 0 or ds.n_cells == 0:
         raise InputError(f"{name}: the dataset is empty (no points or no cells)")
-    pts = np.asarray(ds.points)
-    if not np.isfinite(pts).all():
-        bad = int(np.count_nonzero(~np.isfinite(pts).all(axis=1)))
-        raise InputError(f"{name}: {bad} point(s) have NaN or infinite coordinates")
     if isinstance(ds, pv.PolyData):
         poly = ds.copy(deep=False)
         poly.cell_data[_CELL_ID] = np.arange(ds.n_cells, dtype=np.int64)
@@ -142,10 +158,13 @@ def _surface_polydata(name: str, data: object) -> pv.PolyData:
         blanked = "vtkGhostType" in ds.point_data or "vtkGhostType" in ds.cell_data
         surf = vtkGeometryFilter() if blanked else vtkDataSetSurfaceFilter()
         surf.SetInputData(src)
-        surf.Update()
+        with quiet_vtk() as msgs:
+            surf.Update()
+        if msgs.first_error():
+            raise InputError(f"{name}: VTK could not extract the surface ({msgs.first_error()})")
         poly = pv.wrap(surf.GetOutput())
     if poly.GetNumberOfPolys() == 0 and poly.GetNumberOfStrips() == 0:
-        raise InputError(f"{name}: the dataset has no surface (polygon) cells to capture")
+        return None
     return poly
 
 
@@ -196,17 +215,78 @@ def _compute_normals(poly: pv.PolyData, feature_angle: float) -> pv.PolyData:
     return pv.wrap(alg.GetOutput())
 
 
+def _empty_surface(name: str) -> Surface:
+    """The place of a dataset without surface cells: keeps ``object_id`` in scene order."""
+    mesh = pv.PolyData()
+    mesh.cell_data[_CELL_ID] = np.zeros(0, dtype=np.int64)
+    return Surface(
+        name=name,
+        mesh=mesh,
+        points=np.zeros((0, 3)),
+        triangles=np.zeros((0, 3), dtype=np.int64),
+        cell_ids=np.zeros(0, dtype=np.int64),
+        normals=np.zeros((0, 3), dtype=np.float32),
+    )
+
+
+def _check_area(name: str, points: np.ndarray, triangles: np.ndarray) -> None:
+    """At least one triangle with an area, else there is nothing to draw."""
+    pts = np.asarray(points, dtype=np.float64)
+    a, b, c = (pts[triangles[:, k]] for k in range(3))
+    area2 = np.linalg.norm(np.cross(b - a, c - a), axis=1)
+    longest = np.max([np.linalg.norm(b - a, axis=1), np.linalg.norm(c - b, axis=1),
+                      np.linalg.norm(a - c, axis=1)], axis=0)  # fmt: skip
+    extent = float(np.ptp(pts, axis=0).max()) if len(pts) else 0.0
+    # A triangle counts if its height is above the rounding of its coordinates, relative to
+    # the object's size: a 1e-9 wide part is drawn, float32 points on one line are not.
+    rounding = np.finfo(points.dtype).eps if points.dtype == np.float32 else 1e-15
+    tol = 1e-6 * extent + 8 * rounding * float(np.abs(pts).max(initial=0.0))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        height = np.where(longest > 0, area2 / longest, 0.0)
+    if extent == 0.0 or not (height > tol).any():
+        raise InputError(
+            f"{name}: all {len(triangles)} triangles have zero area (their points coincide or "
+            "lie on one line): nothing to draw"
+        )
+
+
 def make_surface(
     name: str, data: object, transform: np.ndarray | None, feature_angle: float
 ) -> Surface:
-    """Prepare one dataset (see :class:`Surface`). Never modifies ``data``."""
-    poly = _triangulate(_surface_polydata(name, data))
-    normals = _existing_normals(poly)
-    if normals is None:
-        poly = _compute_normals(poly, feature_angle)
-        normals = _existing_normals(poly)
+    """Prepare one dataset (see :class:`Surface`). Never modifies ``data``.
+
+    Raises
+    ------
+    InputError
+        If ``data`` has bad connectivity or points, or no surface cells (only lines or
+        vertices), or only zero-area triangles.
+    """
+    surface = _make_surface(name, data, transform, feature_angle)
+    if surface is None:
+        raise InputError(f"{name}: the dataset has no surface (polygon) cells to capture")
+    return surface
+
+
+def _make_surface(
+    name: str, data: object, transform: np.ndarray | None, feature_angle: float
+) -> Surface | None:
+    poly = _surface_polydata(name, data)
+    if poly is None:
+        return None
+    with quiet_vtk():
+        poly = _triangulate(poly)
+    if poly.GetNumberOfPolys() == 0:
+        return None
     tris = poly.GetPolys()
     conn = np.asarray(pv.convert_array(tris.GetConnectivityArray()), dtype=np.int64)
+    _check_area(name, np.asarray(poly.points), conn.reshape(-1, 3))
+    normals = _existing_normals(poly)
+    if normals is None:
+        with quiet_vtk():
+            poly = _compute_normals(poly, feature_angle)
+        normals = _existing_normals(poly)
+        tris = poly.GetPolys()
+        conn = np.asarray(pv.convert_array(tris.GetConnectivityArray()), dtype=np.int64)
     triangles = conn.reshape(-1, 3)
     cell_ids = np.asarray(poly.cell_data[_CELL_ID], dtype=np.int64)
     points = np.asarray(poly.points, dtype=np.float64)
@@ -226,6 +306,49 @@ def make_surface(
     )
 
 
+def _check_range(surfaces: list[Surface]) -> None:
+    """Refuse coordinates the float32 rasteriser cannot resolve (a blank or garbled picture
+    otherwise): beyond :data:`MAX_COORDINATE`, or a scene much smaller than its distance
+    from the origin (:data:`MIN_RELATIVE_EXTENT`)."""
+    points = np.concatenate([s.points for s in surfaces])
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    far = float(np.abs(points).max())
+    if far > MAX_COORDINATE:
+        raise InputError(
+            f"scene: coordinates reach {far:.3g}, beyond the {MAX_COORDINATE:g} the renderer "
+            "handles (a corrupt file?)"
+        )
+    extent = float((hi - lo).max())
+    offset = float(np.abs((lo + hi) / 2).max())
+    if extent < MIN_RELATIVE_EXTENT * offset:
+        raise InputError(
+            f"scene: the data is {extent:.3g} across but {offset:.3g} from the origin, finer "
+            "than the renderer's float32 vertex precision there; translate it towards the origin"
+        )
+
+
 def collect_surfaces(scene: object, *, feature_angle: float = 30.0) -> list[Surface]:
-    """All surfaces of a scene, in scene order (which defines ``object_id``)."""
-    return [make_surface(n, d, t, feature_angle) for n, d, t in scene_items(scene)]
+    """All surfaces of a scene, in scene order (which defines ``object_id``).
+
+    Datasets with only lines or vertices are left out (an object without triangles keeps its
+    place, so ``object_id`` is still the index in the scene); a scene with no surface at all
+    is an InputError, as are bad connectivity, NaN points, zero-area-only objects and
+    coordinates the renderer cannot resolve.
+    """
+    items = scene_items(scene)
+    surfaces = [_make_surface(n, d, t, feature_angle) for n, d, t in items]
+    if all(s is None for s in surfaces):
+        if len(items) == 1:
+            raise InputError(
+                f"{items[0][0]}: the dataset has no surface (polygon) cells to capture"
+            )
+        raise InputError(
+            "scene: no dataset has surface (polygon) cells to capture (lines and vertices are "
+            "left out)"
+        )
+    out = [
+        s if s is not None else _empty_surface(n)
+        for s, (n, _, _) in zip(surfaces, items, strict=True)
+    ]
+    _check_range(out)
+    return out
