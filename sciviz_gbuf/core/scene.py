@@ -24,7 +24,7 @@ from ..readers.mesh import check_mesh, quiet_vtk, source_name
 
 __all__ = [
     "MAX_COORDINATE",
-    "MIN_RELATIVE_EXTENT",
+    "MIN_COORDINATE_STEPS",
     "Surface",
     "collect_surfaces",
     "is_plotter",
@@ -36,9 +36,9 @@ _CELL_ID = "__sciviz_gbuf_cell_id"
 
 #: Largest coordinate magnitude the float32 rasteriser handles (its squares still fit).
 MAX_COORDINATE = 1e30
-#: Smallest extent of a scene relative to its distance from the origin: below it the float32
-#: vertex positions the rasteriser sees are too coarse to draw the shape (a blank picture).
-MIN_RELATIVE_EXTENT = 1e-4
+#: Fewest coordinate steps an object must span: float32 points 1e7 from the origin step by 1,
+#: so a unit sphere there is a few lattice points (a blank or garbled picture).
+MIN_COORDINATE_STEPS = 1000
 
 
 @dataclass
@@ -250,6 +250,21 @@ def _check_area(name: str, points: np.ndarray, triangles: np.ndarray) -> None:
         )
 
 
+def _check_resolution(name: str, points: np.ndarray) -> None:
+    """Refuse an object whose stored coordinates are too coarse for its size where it is."""
+    if not np.issubdtype(points.dtype, np.floating):
+        return
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    step = float(np.finfo(points.dtype).eps) * float(np.abs(points).max())
+    extent = float((hi - lo).max())
+    if extent < MIN_COORDINATE_STEPS * step:
+        raise InputError(
+            f"{name}: the object is {extent:.3g} across but {float(np.abs(lo + hi).max()) / 2:.3g} "
+            f"from the origin, where its {points.dtype} coordinates step by {step:.3g}: too "
+            "coarse to draw (store the points as float64, or translate them towards the origin)"
+        )
+
+
 def make_surface(
     name: str, data: object, transform: np.ndarray | None, feature_angle: float
 ) -> Surface:
@@ -280,6 +295,7 @@ def _make_surface(
     tris = poly.GetPolys()
     conn = np.asarray(pv.convert_array(tris.GetConnectivityArray()), dtype=np.int64)
     _check_area(name, np.asarray(poly.points), conn.reshape(-1, 3))
+    _check_resolution(name, np.asarray(poly.points))
     normals = _existing_normals(poly)
     if normals is None:
         with quiet_vtk():
@@ -307,23 +323,13 @@ def _make_surface(
 
 
 def _check_range(surfaces: list[Surface]) -> None:
-    """Refuse coordinates the float32 rasteriser cannot resolve (a blank or garbled picture
-    otherwise): beyond :data:`MAX_COORDINATE`, or a scene much smaller than its distance
-    from the origin (:data:`MIN_RELATIVE_EXTENT`)."""
+    """Refuse coordinates beyond :data:`MAX_COORDINATE` (the float32 rasteriser overflows)."""
     points = np.concatenate([s.points for s in surfaces])
-    lo, hi = points.min(axis=0), points.max(axis=0)
     far = float(np.abs(points).max())
     if far > MAX_COORDINATE:
         raise InputError(
             f"scene: coordinates reach {far:.3g}, beyond the {MAX_COORDINATE:g} the renderer "
             "handles (a corrupt file?)"
-        )
-    extent = float((hi - lo).max())
-    offset = float(np.abs((lo + hi) / 2).max())
-    if extent < MIN_RELATIVE_EXTENT * offset:
-        raise InputError(
-            f"scene: the data is {extent:.3g} across but {offset:.3g} from the origin, finer "
-            "than the renderer's float32 vertex precision there; translate it towards the origin"
         )
 
 

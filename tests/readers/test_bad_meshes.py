@@ -27,6 +27,8 @@ COMMANDS = {"edges": "out.png", "capture": "g.npz", "mesh": "m.png"}
 MAY_STILL_BE_A_MESH = ("flip", "cut97")
 
 SPHERE = pv.Sphere(theta_resolution=16, phi_resolution=16)
+SPHERE64 = SPHERE.copy()
+SPHERE64.points = SPHERE.points.astype(np.float64)
 
 
 @pytest.fixture(scope="module")
@@ -197,10 +199,13 @@ def _drawn_or_refused(mesh: pv.DataSet, **kwargs) -> str:
     ("label", "mesh", "expected"),
     [
         ("tiny 1e-9 at the origin", SPHERE.scale(1e-9), "drawn"),
-        ("tiny 1e-9 at 1", SPHERE.scale(1e-9).translate((1, 1, 1)), "refused"),
-        ("unit at 1e7", SPHERE.translate((1e7, -3e7, 2e7)), "refused"),
-        ("unit at 1e12", SPHERE.translate((1e12, 0, 0)), "refused"),
-        ("1e4 across at 1e7", SPHERE.scale(1e4).translate((1e7, 0, 0)), "either"),
+        ("float32 tiny 1e-9 at 1", SPHERE.scale(1e-9).translate((1, 1, 1)), "refused"),
+        ("float32 unit at 1e7", SPHERE.translate((1e7, -3e7, 2e7)), "refused"),
+        ("float32 unit at 1e12", SPHERE.translate((1e12, 0, 0)), "refused"),
+        ("float32 1e4 across at 1e7", SPHERE.scale(1e4).translate((1e7, 0, 0)), "drawn"),
+        ("float64 tiny 1e-9 at 1", SPHERE64.scale(1e-9).translate((1, 1, 1)), "drawn"),
+        ("float64 unit at 1e7", SPHERE64.translate((1e7, -3e7, 2e7)), "drawn"),
+        ("float64 unit at 1e12", SPHERE64.translate((1e12, 0, 0)), "drawn"),
         ("huge 1e20", SPHERE.scale(1e20), "drawn"),
     ],
 )
@@ -220,3 +225,19 @@ def test_read_mesh_names_the_path_as_given(tmp_path, monkeypatch):
     Path("bad.ply").write_bytes(b"ply\nformat ascii 1.0\nelement vertex 1000000000\nend_header\n")
     with pytest.raises(sg.InputError, match=r"^bad\.ply: the PLY header declares"):
         read_mesh("bad.ply")
+
+
+def test_unchecked_formats_are_read_in_a_child(tmp_path):
+    """Formats without a header check (here a .vtm) parse in a child process: the result
+    comes back whole, a child over its time limit is an InputError naming the file."""
+    from sciviz_gbuf.readers._mesh_check import read_isolated
+
+    p = tmp_path / "blocks.vtm"
+    pv.MultiBlock([SPHERE]).save(p)
+    assert read_mesh(p).n_cells == SPHERE.n_cells
+    with pytest.raises(sg.InputError, match=r"blocks\.vtm: reading took more than 0 s"):
+        read_isolated(p, "blocks.vtm", timeout=0)
+    junk = tmp_path / "junk.glb"
+    junk.write_bytes(b"garbage")
+    with pytest.raises(sg.InputError, match=r"junk\.glb: cannot read as a mesh \(.*parse error"):
+        read_mesh(junk)
