@@ -11,7 +11,15 @@ from pathlib import Path
 
 from ..errors import InputError
 
-__all__ = ["add_progress", "number", "png_output", "positive_int", "show_progress", "size"]
+__all__ = [
+    "add_progress",
+    "number",
+    "png_output",
+    "positive_int",
+    "require_coverage",
+    "show_progress",
+    "size",
+]
 
 
 def size(text: str) -> tuple[int, int]:
@@ -73,3 +81,14 @@ def add_progress(p: argparse.ArgumentParser) -> None:
         default=None,
         help="show a progress bar (default: only when stderr is a terminal)",
     )
+
+
+def require_coverage(covered: bool, files: list[str], view: object) -> None:
+    """A picture of nothing is not a success: an InputError naming the file(s) when the capture
+    covers no pixel (a flat mesh seen edge-on, a mesh smaller than a pixel)."""
+    if not covered:
+        what = files[0] if len(files) == 1 else f"{files[0]} (+{len(files) - 1} more)"
+        raise InputError(
+            f"{what}: nothing of it covers a pixel from view {view!r} (seen edge-on, or smaller "
+            "than a pixel): try another --view or a larger --size"
+        )

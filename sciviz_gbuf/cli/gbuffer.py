@@ -14,7 +14,7 @@ from ..core.gbuffer import GBuffer
 from ..errors import InputError
 from ..readers import read_mesh
 from ..styles import illustrate, styles_for
-from ._args import number, positive_int, size
+from ._args import number, positive_int, require_coverage, size
 
 __all__ = ["add_capture", "add_edges", "add_info"]
 
@@ -33,6 +33,7 @@ def _cmd_capture(args: argparse.Namespace) -> int:
         supersample=args.supersample,
         progress_bar=args.progress,
     )
+    require_coverage(bool(g.mask.any()), args.mesh, args.view)
     out = g.save(args.output)
     print(f"{g!r}\nwrote {out}")
     return 0
@@ -55,6 +56,7 @@ def _cmd_edges(args: argparse.Namespace) -> int:
             parallel_projection=True if args.parallel else None,
             supersample=args.supersample,
         )
+        require_coverage(bool(g.mask.any()), args.mesh, args.view)
         bar.step("edges")
         image = illustrate(
             g,

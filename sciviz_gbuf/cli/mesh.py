@@ -11,7 +11,7 @@ from ..core.camera import VIEWS
 from ..core.capture import capture
 from ..readers import read_mesh
 from ..recipes.npr import STYLES, npr_image
-from ._args import add_progress, png_output, positive_int, show_progress, size
+from ._args import add_progress, png_output, positive_int, require_coverage, show_progress, size
 
 __all__ = ["add_mesh"]
 
@@ -49,6 +49,7 @@ def _cmd_mesh(args: argparse.Namespace) -> int:
         progress_bar=show_progress(args),
         **options,
     )
+    require_coverage(bool((image != 255).any()), args.mesh, args.view)  # not blank paper
     write_png(out, image)
     names = ", ".join(Path(p).name for p in args.mesh)
     print(f"wrote {out} ({args.style}) of {names} in {time.perf_counter() - t0:.1f} s")

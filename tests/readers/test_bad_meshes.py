@@ -254,3 +254,17 @@ def test_unchecked_formats_are_read_in_a_child(tmp_path):
     junk.write_bytes(b"garbage")
     with pytest.raises(sg.InputError, match=r"junk\.glb: cannot read as a mesh \(.*parse error"):
         read_mesh(junk)
+
+
+@pytest.mark.parametrize("cmd", list(COMMANDS))
+def test_a_mesh_seen_edge_on_is_not_a_blank_success(tmp_path, cmd):
+    """A flat mesh seen exactly edge-on covers no pixel: refused, not an empty picture."""
+    src = tmp_path / "flat.vtp"
+    pv.Plane(direction=(0, 0, 1), i_size=2, j_size=2).triangulate().save(src)
+    out = tmp_path / COMMANDS[cmd]
+    args = [cmd, src.name, "-o", out.name, "--size", "64x48", "--view", "xz", "--parallel"]
+    proc = run_cli(args, cwd=tmp_path)
+    line = assert_clean_failure(proc, names=src.name, outputs=[out], inputs=checksums([src]))
+    assert "covers a pixel" in line
+    seen = run_cli([*args[:-3], "--view", "xy", "--parallel"], cwd=tmp_path)
+    assert seen.returncode == 0, seen.stderr  # from above it is drawn
