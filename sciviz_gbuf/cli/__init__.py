@@ -59,6 +59,10 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _drop_warning(*args: object, **kwargs: object) -> None:
+    """``warnings.showwarning`` after a failure: late warnings are not printed."""
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit status: 0, or 2 for bad input, an output that
     could not be written, or SIGTERM/SIGINT (one line on stderr; no output file is left
@@ -71,13 +75,20 @@ def main(argv: Sequence[str] | None = None) -> int:
     # Warnings are held and printed as one line each after the command succeeded: a failure
     # prints its one error line only (a warning about, say, a missing georeference before it
     # would only obscure it).
+    failure: BaseException | None = None
     with raising_signals(), warnings.catch_warnings(record=True) as caught:
         try:
             with output_group():
                 status = int(args.func(args))
         except (SciVizGBufError, Interrupted) as exc:
-            print(f"sciviz-gbuf {args.command}: error: {exc}", file=sys.stderr)
-            return 2
+            failure = exc
+    if failure is not None:
+        # Worker threads of a failed computation (dask) may still finish a task and warn
+        # after the error: nothing may follow the error line.
+        warnings.simplefilter("ignore")
+        warnings.showwarning = _drop_warning
+        print(f"sciviz-gbuf {args.command}: error: {failure}", file=sys.stderr)
+        return 2
     for w in caught:
         if not issubclass(w.category, (DeprecationWarning, PendingDeprecationWarning)):
             text = one_line(str(w.message))
