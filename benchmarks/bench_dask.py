@@ -13,6 +13,8 @@ worker and of this (writing) process.
 
     python benchmarks/bench_dask.py                    # 20000 x 20000 in part 2 (minutes)
     python benchmarks/bench_dask.py --size 6000 --part1-size 4096   # quicker
+    python benchmarks/bench_dask.py --skip-part1 --size 4096,16384,30000 --workers 2
+        # memory per worker against the raster's size, same chunks (about 8 minutes)
 """
 
 from __future__ import annotations
@@ -151,7 +153,9 @@ def part2(size: int, workers: list[int], chunks: int, memory_limit: str) -> list
 
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--size", type=int, default=20000, help="part 2 grid edge (default 20000)")
+    p.add_argument(
+        "--size", default="20000", help="part 2 grid edge(s), comma-separated (default 20000)"
+    )
     p.add_argument("--part1-size", type=int, default=8192, help="part 1 grid edge")
     p.add_argument("--chunks", default="512,1024,2048,4096", help="part 1 chunk sizes")
     p.add_argument("--workers", default="1,2", help="part 2 worker counts")
@@ -170,25 +174,34 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{name:<40} {t:8.2f} {rate:8.1f} {rate / base:9.2f}x")
     if args.skip_part2:
         return 0
-    rows = part2(
-        args.size, [int(w) for w in args.workers.split(",")], args.cluster_chunks,
-        args.memory_limit,
-    )  # fmt: skip
-    print(
-        f"\nPart 2: {args.size}^2 synthetic DEM -> map -> COG + PNG overview, LocalCluster, "
-        f"chunks {args.cluster_chunks}, memory limit {args.memory_limit} per worker"
-    )
-    print(
-        f"{'workers':>7} {'map s':>7} {'MPix/s':>7} {'speed-up':>9} {'to COG s':>9} "
-        f"{'MPix/s':>7} {'speed-up':>9} {'worker peak MB':>15} {'client peak MB':>15} "
-        f"{'COG MB':>7}"
-    )
-    b0, c0 = rows[0][1], rows[0][3]
-    for n, tb, rb, t, rate, wpeak, cpeak, mb in rows:
+    sizes = [int(v) for v in args.size.split(",")]
+    workers = [int(w) for w in args.workers.split(",")]
+    memory = []
+    for size in sizes:
+        rows = part2(size, workers, args.cluster_chunks, args.memory_limit)
         print(
-            f"{n:>7} {tb:7.1f} {rb:7.1f} {b0 / tb:8.2f}x {t:9.1f} {rate:7.1f} {c0 / t:8.2f}x "
-            f"{wpeak:15.0f} {cpeak:15.0f} {mb:7.1f}"
+            f"\nPart 2: {size}^2 synthetic DEM -> map -> COG + PNG overview, LocalCluster, "
+            f"chunks {args.cluster_chunks}, memory limit {args.memory_limit} per worker"
         )
+        print(
+            f"{'workers':>7} {'map s':>7} {'MPix/s':>7} {'speed-up':>9} {'to COG s':>9} "
+            f"{'MPix/s':>7} {'speed-up':>9} {'worker peak MB':>15} {'client peak MB':>15} "
+            f"{'COG MB':>7}"
+        )
+        b0, c0 = rows[0][1], rows[0][3]
+        for n, tb, rb, t, rate, wpeak, cpeak, mb in rows:
+            print(
+                f"{n:>7} {tb:7.1f} {rb:7.1f} {b0 / tb:8.2f}x {t:9.1f} {rate:7.1f} "
+                f"{c0 / t:8.2f}x {wpeak:15.0f} {cpeak:15.0f} {mb:7.1f}"
+            )
+            memory.append((size, n, wpeak, cpeak))
+    if len(sizes) > 1:
+        # The acceptance of bounded memory: peak per worker independent of the raster's size.
+        print(f"\nPeak memory against the raster's size (chunks {args.cluster_chunks})")
+        print(f"{'size':>7} {'workers':>7} {'worker MB':>10} {'vs smallest':>12} {'client MB':>10}")
+        first = {n: w for s_, n, w, _ in memory if s_ == sizes[0]}
+        for size, n, wpeak, cpeak in memory:
+            print(f"{size:>7} {n:>7} {wpeak:10.0f} {wpeak / first[n]:11.2f}x {cpeak:10.0f}")
     return 0
 
 

@@ -14,10 +14,20 @@ no such radius and are refused.
 Parameters that need the whole grid (a default colour range, a default contour interval from
 the data's range and slope) are computed first in a cheap reduction pass (:func:`reduce`);
 each function that does this says so.
+
+Memory that does not grow with the raster. ``map_overlap`` builds each output chunk from its
+own input chunk and slices of its eight neighbours, so an input chunk stays in memory until
+the last of its neighbours is done: in a row-major traversal, about two rows of input chunks,
+a number that grows with the raster's width. Sources that can read any window themselves (a
+GDAL raster read lazily, :func:`~sciviz_gbuf.datasets.synthetic_dem`) are registered here
+(:func:`register_windows`); :func:`map_windows` then makes one task per output chunk that reads
+its chunk *with* the halo and computes everything from it: no task depends on another, and a
+worker holds only the chunks it is computing, whatever the raster's size.
 """
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from collections.abc import Callable, Mapping
 from typing import Any
 
@@ -25,7 +35,21 @@ import numpy as np
 
 from .errors import InputError
 
-__all__ = ["any_dask", "as_dask", "is_dask", "map_stencil", "reduce"]
+__all__ = [
+    "any_dask",
+    "as_dask",
+    "is_dask",
+    "map_stencil",
+    "map_windows",
+    "reduce",
+    "register_windows",
+    "windows_of",
+]
+
+#: Window readers by the name of the dask array they read (dask names are tokens of the
+#: source: the same file and chunks give the same name). Bounded: the oldest are forgotten.
+_WINDOWS: OrderedDict[str, Any] = OrderedDict()
+_MAX_WINDOWS = 256
 
 
 def is_dask(x: object) -> bool:
@@ -125,3 +149,76 @@ def reduce(*values: Any) -> tuple:
     import dask
 
     return dask.compute(*values)
+
+
+def register_windows(array: Any, reader: Any) -> Any:
+    """Say that ``reader[rows, cols]`` (two slices, steps 1) returns the values of the 2-D dask
+    ``array`` in that window, as ``array[rows, cols].compute()`` would, bit for bit, reading
+    only that window. ``reader`` must be picklable (it travels to distributed workers).
+    Returns ``array``."""
+    _WINDOWS[array.name] = reader
+    _WINDOWS.move_to_end(array.name)
+    while len(_WINDOWS) > _MAX_WINDOWS:
+        _WINDOWS.popitem(last=False)
+    return array
+
+
+def windows_of(array: Any) -> Any | None:
+    """The window reader registered for exactly this dask array (None for any other array,
+    a slice or a computation of it included)."""
+    return _WINDOWS.get(getattr(array, "name", None)) if is_dask(array) else None
+
+
+def map_windows(
+    func: Callable[[np.ndarray, tuple[slice, slice]], np.ndarray],
+    array: Any,
+    *,
+    halo: int,
+    dtype: type = np.float32,
+    bands: int | None = None,
+) -> Any:
+    """``func`` on every chunk of a registered ``array`` (:func:`register_windows`), each chunk
+    read with a halo of ``halo`` cells by its own task.
+
+    Parameters
+    ----------
+    func : callable
+        ``func(window, inner)``: ``window`` the cells of the chunk and up to ``halo`` cells
+        around it (fewer at the grid's own edges, as ``map_overlap(boundary="none")`` gives),
+        ``inner`` the (rows, cols) slices of the chunk in it. Returns the chunk's result:
+        shape of ``window[inner]``, plus an axis of ``bands`` if given.
+    array : dask.array.Array
+        2-D, with a window reader (:func:`windows_of` is not None).
+    halo : int >= 0
+        How far from an output cell the cells ``func`` reads lie (its stencil radius).
+    dtype : numpy dtype
+        Of the result.
+    bands : int, optional
+        Length of a third axis of the result (an RGBA map: 4).
+
+    Returns
+    -------
+    dask.array.Array
+        Lazy, chunked like ``array`` (and one chunk along the bands); no task depends on
+        another, so each can be computed, written and dropped alone.
+    """
+    import dask.array as da
+
+    reader = windows_of(array)
+    if reader is None:
+        raise InputError("map_windows: the array has no window reader (see register_windows)")
+    halo = int(halo)
+    if halo < 0:
+        raise InputError(f"halo: expected an integer >= 0, got {halo}")
+    rows, cols = array.shape
+
+    def block(block_info=None) -> np.ndarray:
+        (r0, r1), (c0, c1) = block_info[None]["array-location"][:2]
+        a0, b0 = max(0, r0 - halo), max(0, c0 - halo)
+        window = reader[a0 : min(rows, r1 + halo), b0 : min(cols, c1 + halo)]
+        inner = (slice(r0 - a0, r1 - a0), slice(c0 - b0, c1 - b0))
+        return func(window, inner)
+
+    chunks = array.chunks if bands is None else (*array.chunks, (int(bands),))
+    meta = np.empty((0,) * len(chunks), dtype)
+    return da.map_blocks(block, chunks=chunks, dtype=dtype, meta=meta)

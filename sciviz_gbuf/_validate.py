@@ -48,6 +48,7 @@ LIMITS: dict[str, float] = {
     "line_width": 64.0,  # px: edge, contour, hatch, stroke and profile line widths
     "spacing": 1024.0,  # px: hatch and stroke spacing, contour dense spacing
     "levels": 100_000,  # contour / band / isophote levels and reflection stripes in one call
+    "segments": 10_000_000,  # contour polyline segments (cell crossings) of one call
     "bands": 4096,  # colour band count
     "directions": 360,  # sky-view horizon directions
     "reach": 4096,  # cells: sky-view search radius (radius / min(dx, dy))

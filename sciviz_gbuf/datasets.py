@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pyvista as pv
 
+from . import _dask
 from .errors import InputError
 from .readers import DEM, metres_per_degree, read_dem
 
@@ -175,8 +176,32 @@ def synthetic_dem(shape: tuple[int, int], *, chunks: int | tuple[int, int] = 204
     phases = rng.uniform(0.0, 2 * np.pi, (octaves, 2))
     amps = 600.0 * (wavelengths / wavelengths[0]) ** 0.8
 
+    generator = _SyntheticHeights(wavelengths, angles, phases, amps)
+
     def block(block_info=None) -> np.ndarray:
         (r0, r1), (c0, c1) = block_info[None]["array-location"]
+        return generator[r0:r1, c0:c1]
+
+    heights = da.map_blocks(
+        block, chunks=da.core.normalize_chunks(chunks, (rows, cols)), dtype=np.float32,
+        meta=np.empty((0, 0), np.float32),
+    )  # fmt: skip
+    _dask.register_windows(heights, generator)  # out-of-core maps read windows with halos
+    transform = (0.0, 30.0, 0.0, 30.0 * rows, 0.0, -30.0)
+    return DEM(heights, da.isfinite(heights), None, transform, (30.0, 30.0), False, "synthetic")
+
+
+class _SyntheticHeights:
+    """The heights of :func:`synthetic_dem` in any window: ``self[r0:r1, c0:c1]``, a function of
+    the global rows and columns only (picklable: numbers only)."""
+
+    def __init__(self, wavelengths, angles, phases, amps) -> None:
+        self.wavelengths, self.angles, self.phases, self.amps = wavelengths, angles, phases, amps
+
+    def __getitem__(self, key: tuple[slice, slice]) -> np.ndarray:
+        (r0, r1), (c0, c1) = ((k.start or 0, k.stop) for k in key)
+        wavelengths, angles, phases, amps = self.wavelengths, self.angles, self.phases, self.amps
+        octaves = len(wavelengths)
         r = np.arange(r0, r1, dtype=np.float64)
         c = np.arange(c0, c1, dtype=np.float64)
         z = np.full((r1 - r0, c1 - c0), 1500.0, dtype=np.float32)
@@ -204,10 +229,3 @@ def synthetic_dem(shape: tuple[int, int], *, chunks: int | tuple[int, int] = 204
         h = (h * np.uint64(2654435761)) % np.uint64(1 << 31)
         z += (h * (2.0 / float(1 << 31)) - 1.0).astype(np.float32)
         return z
-
-    heights = da.map_blocks(
-        block, chunks=da.core.normalize_chunks(chunks, (rows, cols)), dtype=np.float32,
-        meta=np.empty((0, 0), np.float32),
-    )  # fmt: skip
-    transform = (0.0, 30.0, 0.0, 30.0 * rows, 0.0, -30.0)
-    return DEM(heights, da.isfinite(heights), None, transform, (30.0, 30.0), False, "synthetic")

@@ -38,6 +38,7 @@ import threading
 import time
 from collections.abc import Callable, Iterator
 
+from .._atomic import one_line
 from ..errors import InputError
 from .explorer import RELIEF_VARIANTS, STYLES, VIEWS, encode_jpeg_data_url
 
@@ -182,7 +183,7 @@ def build_app(
     def refused(exc: Exception, good: dict) -> None:
         # The page shows why, and the controls go back to the last good values: a refused
         # value must not stay in the state (every later update would fail on it).
-        state.error = " ".join(str(exc).split())[:_ERROR_CHARS]
+        state.error = one_line(str(exc), _ERROR_CHARS)
         back = {k: v for k, v in good.items() if state[k] != v}
         keep_error[0] = bool(back)
         state.update(back)

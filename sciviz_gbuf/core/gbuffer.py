@@ -280,8 +280,7 @@ class GBuffer:
                 zlib.error,
                 TokenError,
             ) as exc:
-                why = " ".join(str(exc).split())
-                raise InputError(f"{p}: cannot read as .npz ({why})") from exc
+                raise InputError(f"{p}: cannot read as .npz ({one_line(str(exc))})") from exc
             except MemoryError as exc:  # a lying array header
                 raise InputError(
                     f"{p}: an array in it declares more data than fits in memory"

@@ -1,9 +1,14 @@
 """Contour polylines for GIS: the vector counterpart of :func:`.contour_lines`.
 
 The raster lines of :func:`.contour_lines` are what a map needs on screen; a GIS needs the lines
-themselves. These are traced with marching squares (:func:`skimage.measure.find_contours`) at
-the same levels, so the two agree: both put a level where the field crosses it, interpolated
-linearly between pixel centres.
+themselves. These are traced with marching squares (contourpy, matplotlib's C++ contouring,
+all levels in one call) at the same levels, so the two agree: both put a level where the field
+crosses it, interpolated linearly between pixel centres.
+
+The work and the output grow with the number of cell crossings (a cell is crossed by every
+level between its lowest and highest corner), not the number of levels: they are counted
+first, from the cells' ranges, and more than ``LIMITS["segments"]`` is refused before anything
+is traced.
 """
 
 from __future__ import annotations
@@ -12,7 +17,6 @@ from collections.abc import Sequence
 from typing import Any, NamedTuple
 
 import numpy as np
-from skimage import measure
 
 from .. import _validate
 from ..errors import InputError
@@ -21,6 +25,8 @@ __all__ = ["ContourPolyline", "contour_polylines", "polylines_to_geojson"]
 
 #: Most levels one call traces (``interval=`` or ``levels=``): ``LIMITS["levels"]``.
 MAX_LEVELS = int(_validate.LIMITS["levels"])
+#: Most line segments (cell crossings) one call traces: ``LIMITS["segments"]``.
+MAX_SEGMENTS = int(_validate.LIMITS["segments"])
 
 
 class ContourPolyline(NamedTuple):
@@ -46,6 +52,21 @@ def _regular_levels(values: np.ndarray, interval: float, base: float) -> np.ndar
             f"[{lo:g}, {hi:g}]; expected at most {MAX_LEVELS}"
         )
     return base + np.arange(n0, n1 + 1) * interval
+
+
+def _crossings(s: np.ndarray, valid: np.ndarray, levels: np.ndarray) -> int:
+    """How many (cell, level) pairs have the level within the cell's range: an upper bound of
+    the segments marching squares makes (sorted ``levels``; cells with a nodata corner cross
+    nothing)."""
+    if min(s.shape) < 2:
+        return 0
+    corners = (s[:-1, :-1], s[:-1, 1:], s[1:, :-1], s[1:, 1:])
+    ok = valid[:-1, :-1] & valid[:-1, 1:] & valid[1:, :-1] & valid[1:, 1:]
+    lo = np.minimum(np.minimum(corners[0], corners[1]), np.minimum(corners[2], corners[3]))[ok]
+    hi = np.maximum(np.maximum(corners[0], corners[1]), np.maximum(corners[2], corners[3]))[ok]
+    first = np.searchsorted(levels, lo, side="left")
+    last = np.searchsorted(levels, hi, side="right")
+    return int(np.sum(last - first, dtype=np.int64))
 
 
 def _apply_transform(xy: np.ndarray, transform: Sequence[float] | None) -> np.ndarray:
@@ -110,17 +131,52 @@ def contour_polylines(
         return []
     if q is not None:
         lv = _regular_levels(s[valid], q, base)
-    # find_contours must not see NaN: fill it (the mask keeps the fill out of every line).
-    filled = np.where(valid, s, np.float32(s[valid].min()))
-    out = []
-    for level in lv:
-        is_major = major is not None and bool(
-            np.isclose((level - base) / major, np.round((level - base) / major), atol=1e-6)
+    lv = np.unique(np.asarray(lv, dtype=np.float64))
+    crossings = _crossings(s, valid, lv)
+    if crossings > MAX_SEGMENTS:
+        raise InputError(
+            f"levels: {len(lv)} levels cross the field's cells {crossings} times; expected at "
+            f"most {MAX_SEGMENTS} line segments (a coarser interval, fewer levels)"
         )
-        for rc in measure.find_contours(filled, float(level), mask=valid):
-            xy = _apply_transform(rc[:, ::-1].astype(np.float64), transform)
-            closed = bool(len(rc) > 2 and np.array_equal(rc[0], rc[-1]))
-            out.append(ContourPolyline(float(level), is_major, xy, closed))
+    import contourpy
+
+    # Masked cells (any corner nodata) are left out whole, as the raster lines leave them.
+    z = np.ma.masked_array(np.where(valid, s, 0.0).astype(np.float64), mask=~valid)
+    gen = contourpy.contour_generator(
+        z=z, name="serial", corner_mask=False, line_type=contourpy.LineType.ChunkCombinedOffset
+    )
+    if major is None:
+        majors = np.zeros(len(lv), bool)
+    else:
+        n = (lv - base) / major
+        majors = np.isclose(n, np.round(n), atol=1e-6)
+    # All levels' lines in one array (line k = pts[off[k]:off[k + 1]]): the checks below are
+    # then a few array operations, not a few per level (100000 levels are allowed).
+    found = [(k, p[0], o[0]) for k, (p, o) in enumerate(gen.multi_lines(lv)) if p[0] is not None]
+    if not found:
+        return []
+    at, parts, offs = zip(*found, strict=True)
+    n_points = np.array([len(p) for p in parts], np.int64)
+    counts = np.array([len(o) - 1 for o in offs], np.int64)
+    base_of = np.repeat(np.cumsum(n_points) - n_points, counts)  # each level's first point
+    pts = np.concatenate(parts)
+    ends_ = np.concatenate([o[1:] for o in offs]).astype(np.int64) + base_of
+    off = np.concatenate(([0], ends_))
+    which = np.repeat(np.asarray(at, np.int64), counts)
+    starts, ends = off[:-1], off[1:] - 1
+    closed = ((ends - starts) > 1) & (pts[starts] == pts[ends]).all(axis=1)
+    # a level at a local extremum's own value makes a ring of one point (zero length): dropped
+    span = np.maximum.reduceat(pts, starts) - np.minimum.reduceat(pts, starts)
+    keep = (span > 0).any(axis=1)
+    xy = _apply_transform(pts, transform)
+    levels_, majors_ = lv[which].tolist(), majors[which].tolist()
+    out = [
+        ContourPolyline(levels_[n], majors_[n], xy[a:b], c)
+        for n, (a, b, c, k) in enumerate(
+            zip(starts.tolist(), off[1:].tolist(), closed.tolist(), keep.tolist(), strict=True)
+        )
+        if k
+    ]
     return out
 
 

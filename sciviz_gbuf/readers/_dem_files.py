@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._atomic import one_line
 from ..errors import InputError
 
 __all__ = [
@@ -62,11 +63,6 @@ def blank_nodata(values: np.ndarray, nodata: float | None, *, owned: bool = Fals
         # Compared in the source type: a float32 cast could merge nodata with a close height.
         np.putmask(heights, values == nodata, np.float32(np.nan))
     return heights
-
-
-def _one_line(exc: BaseException) -> str:
-    """A library's error text on one line (GDAL and PyVista messages span several)."""
-    return " ".join(str(exc).split())
 
 
 def crs_is_geographic(crs: str | None) -> bool | None:
@@ -203,7 +199,7 @@ def _npy_header(
         else:
             shape, _, dtype = fmt.read_array_header_2_0(f)
     except Exception as exc:  # numpy's header parser raises many types on damaged bytes
-        why = " ".join(str(exc).split()) or type(exc).__name__
+        why = one_line(str(exc)) or type(exc).__name__
         raise InputError(f"{path}{where}: not a NumPy .npy array ({why})") from exc
     if dtype.hasobject or not (
         np.issubdtype(dtype, np.integer)
@@ -325,7 +321,7 @@ def read_geotiff(path: Path) -> RawDEM:
                 values = src.read(1)
                 nodata = src.nodata
     except rasterio.errors.RasterioError as exc:
-        raise InputError(f"{path}: cannot read as a GeoTIFF ({_one_line(exc)})") from exc
+        raise InputError(f"{path}: cannot read as a GeoTIFF ({one_line(str(exc))})") from exc
     except UnicodeError as exc:  # GDAL takes UTF-8 file names only
         raise InputError(
             f"{path}: GDAL cannot open a file whose name is not UTF-8: rename it"

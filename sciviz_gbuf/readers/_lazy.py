@@ -291,6 +291,8 @@ def read_dem_lazy(
             meta=np.empty((0, 0), np.float32),
             asarray=False,
         )
+        # Window reads of their own for out-of-core maps (memory independent of the size).
+        _dask.register_windows(heights, reader)
         geo = georeference(raw, shape, name, spacing=spacing, geographic=geographic)
         return DEM(heights, da.isfinite(heights), raw.crs, *geo, name)
     if is_dataarray(source) and _dask.is_dask(getattr(source, "data", None)):

@@ -19,8 +19,10 @@ from .. import _dask as _chunks
 from ..errors import InputError
 from ..filters import fill_nodata_ring, hillshade
 from ..filters import sky_view as sky_view_factor
+from ..filters.contours import RADIUS as CONTOUR_RADIUS
 from ..filters.hillshade import FILL_RING_RADIUS
 from ..filters.hillshade import RADIUS as HILLSHADE_RADIUS
+from ..filters.terrain_light import sky_view_reach
 from ..readers import DEM
 from ._intervals import choose_intervals, median_slope, slope_lattice
 from ._map import composite, flat_shade, map_band_tables, map_contours
@@ -101,6 +103,23 @@ def lazy_topographic_map(
         bands, interval, major_interval, cmap, lo if vmin is None else vmin,
         hi if vmax is None else vmax, sea_level,
     )  # fmt: skip
+    flat = 1.0
+    light = {"azimuth": azimuth, "altitude": altitude, "z_factor": z_factor, "variant": variant}
+    if relief:
+        hillshade(np.zeros((3, 3), np.float32), dx=dx, dy=dy, **light)  # checks now
+        flat = max(flat_shade(dx=dx, dy=dy, **light), 1e-3)
+    if _chunks.windows_of(z) is not None:
+        ink_options = {
+            "interval": interval,
+            "major_interval": major_interval,
+            "width": width,
+            "major_width": major_width,
+            "dense_spacing": dense_spacing,
+        }
+        return _windowed_map(
+            z, colour, tables, ink_options if contours else None, light if relief else None,
+            sky_view and relief, dx, dy, flat,
+        )  # fmt: skip
     layers: dict[str, object] = {}
     if contours:
         layers["ink"] = map_contours(
@@ -111,11 +130,7 @@ def lazy_topographic_map(
             major_width=major_width,
             dense_spacing=dense_spacing,
         )
-    flat = 1.0
     if relief:
-        light = {"azimuth": azimuth, "altitude": altitude, "z_factor": z_factor}
-        light["variant"] = variant
-        hillshade(np.zeros((3, 3), np.float32), dx=dx, dy=dy, **light)  # checks now
         layers["sh"] = _chunks.map_stencil(
             _relief_block,
             {"heights": z},
@@ -124,7 +139,6 @@ def lazy_topographic_map(
             dy=dy,
             **light,
         )
-        flat = max(flat_shade(dx=dx, dy=dy, **light), 1e-3)
         if sky_view:
             layers["sky"] = sky_view_factor(z, dx=dx, dy=dy, z_factor=z_factor)
     # Layers whose halo was wider than a chunk come back coarser: back to the map's chunks.
@@ -147,3 +161,45 @@ def lazy_topographic_map(
         dtype=np.uint8,
         meta=np.empty((0, 0, 0), np.uint8),
     )
+
+
+def _windowed_map(
+    z,
+    colour: np.ndarray,
+    tables,
+    ink_options: dict | None,
+    light: dict | None,
+    sky_view: bool,
+    dx: float,
+    dy: float,
+    flat: float,
+):
+    """The map of heights that can be read by window (:func:`~sciviz_gbuf._dask.map_windows`):
+    one task per chunk reads the chunk with the widest halo any layer needs and computes every
+    layer and the composite from it. Each layer's cells see the same neighbourhood as in
+    memory (a wider halo than a layer's own radius changes none of its cells), so the pixels
+    are those of the in-memory map; no task waits for another's data, so a worker's memory is
+    that of the chunks it computes, whatever the DEM's size."""
+    halo = 0
+    if ink_options is not None:
+        halo = CONTOUR_RADIUS
+        map_contours(np.zeros((3, 3), np.float32), **ink_options)  # checks now
+    if light is not None:
+        halo = max(halo, RELIEF_HALO)
+        if sky_view:
+            reach = 50.0 * max(float(dx), float(dy))  # sky_view's default radius
+            halo = max(halo, sky_view_reach(reach, dx, dy))
+
+    def block(window: np.ndarray, inner: tuple[slice, slice]) -> np.ndarray:
+        lay: dict = {"tables": tables, "relief": light is not None, "flat": flat, "ink": None}
+        if ink_options is not None:
+            lay["ink"] = map_contours(window, **ink_options)[inner]
+        if light is not None:
+            lay["sh"] = _relief_block(window, dx=dx, dy=dy, **light)[inner]
+            if sky_view:
+                lay["sky"] = sky_view_factor(window, dx=dx, dy=dy, z_factor=light["z_factor"])[
+                    inner
+                ]
+        return composite(lay, np.ascontiguousarray(window[inner]), colour)
+
+    return _chunks.map_windows(block, z, halo=halo, dtype=np.uint8, bands=4)

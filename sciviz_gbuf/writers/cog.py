@@ -221,7 +221,8 @@ def write_cog(
             writer.close()
             check_tiff(part, (h, w, c), tmp)  # the intermediate: its close may have failed
             with gdal_writing(part):
-                rasterio.shutil.copy(
+                _waiting(
+                    rasterio.shutil.copy,
                     tmp,
                     part.path,
                     driver="COG",
@@ -244,6 +245,36 @@ def write_cog(
             _overview_png(part.path, png, int(overview_size))
             bar.step("overview")
     return out
+
+
+def _waiting(func: Any, *args: Any, **kwargs: Any) -> Any:
+    """``func(*args, **kwargs)`` in a helper thread, this one waiting in short steps.
+
+    A long GDAL call (the COG copy of a large map takes minutes) holds the main thread until it
+    returns, and Python runs signal handlers only there, between bytecodes: SIGTERM would wait
+    for the call. GDAL releases the GIL, so while it works in the helper this thread keeps
+    running bytecodes, and the :func:`~sciviz_gbuf._atomic.raising_signals` handler raises at
+    once; the clean-up that follows removes the files the abandoned call was writing.
+    """
+    import rasterio
+
+    box: dict[str, Any] = {}
+    options = rasterio.env.getenv() if rasterio.env.hasenv() else {}
+
+    def run() -> None:
+        try:
+            with rasterio.Env(**options):  # rasterio's settings are per thread
+                box["result"] = func(*args, **kwargs)
+        except BaseException as exc:  # re-raised in the caller's thread
+            box["error"] = exc
+
+    helper = threading.Thread(target=run, name="sciviz-gbuf-gdal", daemon=True)
+    helper.start()
+    while helper.is_alive():
+        helper.join(0.1)
+    if "error" in box:
+        raise box["error"]
+    return box.get("result")
 
 
 def check_cog(path: str | os.PathLike) -> None:

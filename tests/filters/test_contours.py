@@ -488,19 +488,39 @@ def test_polylines_agree_with_find_contours_and_the_raster():
     s = (x**2 + y**2).astype(np.float32)
     lines = contour_polylines(s, interval=0.25, major_interval=0.5)
     assert [ln.level for ln in lines] == sorted(ln.level for ln in lines)
+    # levels 0 and 2 are the minimum's and the corners' own values: no line (not a ring
+    # of one point); 1.25 to 1.75 are arcs across the corners
+    assert {ln.level for ln in lines} == {0.25 * k for k in range(1, 8)}
     rings = [ln for ln in lines if ln.closed]
-    assert {ln.level for ln in rings} == {0.25, 0.5, 0.75, 1.0}
-    assert {ln.level: ln.major for ln in rings} == {0.25: False, 0.5: True, 0.75: False, 1.0: True}
-    ref = measure.find_contours(s, 0.5)
-    np.testing.assert_allclose(next(ln for ln in lines if ln.level == 0.5).points, ref[0][:, ::-1])
+    # the circle of level 1 touches the square's edges at four cells: it may end there
+    assert {ln.level for ln in rings} >= {0.25, 0.5, 0.75}
+    assert {ln.level: ln.major for ln in lines} == {k / 4: k % 2 == 0 for k in range(1, 8)}
+    for level in (0.25, 0.5, 0.75):
+        # the same crossings as scikit-image's marching squares (an independent tracer)
+        ref = np.concatenate(measure.find_contours(s, level))[:, ::-1]
+        got = np.concatenate([ln.points for ln in lines if ln.level == level])
+        key = lambda a: set(map(tuple, np.round(a, 6)))  # noqa: E731
+        assert key(got) == key(ref)
     ink = contour_lines(s, interval=0.25, width=1.5)
-    for ln in rings:
+    for ln in lines:
         r = np.sqrt(ln.level) * 75  # radius in px
         np.testing.assert_allclose(
             np.hypot(ln.points[:, 0] - 75, ln.points[:, 1] - 75), r, atol=0.5
         )
         vals = ndimage.map_coordinates(ink, [ln.points[:, 1], ln.points[:, 0]], order=1)
         assert vals.min() >= 0.5
+
+
+def test_polylines_many_levels_are_bounded_by_their_crossings():
+    """100000 levels are allowed where they cross few cells, and refused (before tracing)
+    where they would make more than LIMITS["segments"] segments."""
+    s = np.add.outer(np.arange(40.0), np.arange(50.0)).astype(np.float32)  # 0 .. 88
+    lines = contour_polylines(s, levels=np.linspace(10.0, 10.5, 100_000))
+    assert len({ln.level for ln in lines}) == 100_000
+    assert all(not ln.closed for ln in lines)
+    big = np.add.outer(np.arange(2000.0), np.arange(2000.0)).astype(np.float32)
+    with pytest.raises(InputError, match="segments"):
+        contour_polylines(big, levels=np.linspace(0.0, 3998.0, 100_000))
 
 
 def test_polylines_respect_nan_and_transform():

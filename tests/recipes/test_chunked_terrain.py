@@ -12,6 +12,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from sciviz_gbuf import _dask
 from sciviz_gbuf.errors import InputError
 from sciviz_gbuf.filters import (
     c1_discontinuity,
@@ -174,6 +175,56 @@ def test_topographic_map_bit_identical_on_shared_dems(name, chunks, kwargs):
     assert lazy.dtype == np.uint8 and lazy.shape == ref.shape
     assert lazy.chunks[:2] == da.from_array(d.heights, chunks=chunks).chunks
     assert _same(lazy.compute(), ref)
+
+
+def _read_lazy(name: str, chunks):
+    path = DATA / name
+    if not path.is_file():
+        pytest.skip(f"{path} not available")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        return read_dem(path, chunks=chunks)
+
+
+@pytest.mark.parametrize(("name", "chunks", "kwargs"), MAPS)
+def test_windowed_map_of_a_file_is_bit_identical_with_independent_tasks(name, chunks, kwargs):
+    """A DEM file read lazily is mapped by one task per chunk that reads its own window with
+    the halo: the same pixels as in memory, and no task depends on another (so a worker's
+    memory does not grow with the raster)."""
+    d = _read_lazy(name, chunks)
+    if _dask.windows_of(d.heights) is None:
+        pytest.skip(f"{name}: not read in windows")
+    ref = topographic_map(_dem(name), **kwargs)
+    lazy = topographic_map(d, **kwargs)
+    graph = dict(lazy.__dask_graph__())
+    assert len(graph) == lazy.numblocks[0] * lazy.numblocks[1]  # one task a block, nothing else
+    assert _same(lazy.compute(), ref)
+
+
+def test_windowed_map_halo_is_exact(monkeypatch):
+    d = _read_lazy("hugo_site.asc", ODD)
+    assert _dask.windows_of(d.heights) is not None
+    ref = topographic_map(_dem("hugo_site.asc"), contours=False, bands=False)
+    assert _same(topographic_map(d, contours=False, bands=False).compute(), ref)
+    monkeypatch.setattr(terrain_chunked, "RELIEF_HALO", terrain_chunked.RELIEF_HALO - 1)
+    short = topographic_map(d, contours=False, bands=False)
+    assert not _same(short.compute(), ref)
+
+
+def test_windowed_and_overlap_maps_of_the_synthetic_dem_agree():
+    from sciviz_gbuf.datasets import synthetic_dem
+
+    d = synthetic_dem((300, 410), chunks=(64, 96))
+    assert _dask.windows_of(d.heights) is not None
+    kwargs = {"sky_view": True, "major_interval": 100.0}
+    windowed = topographic_map(d, **kwargs).compute()
+    z = d.heights.compute()
+    plain = dataclasses.replace(d, heights=z, mask=np.isfinite(z))
+    assert _same(windowed, topographic_map(plain, **kwargs))
+    # a derived array (no window reader) takes the map_overlap path: the same pixels
+    derived = dataclasses.replace(d, heights=d.heights + np.float32(0.0))
+    assert _dask.windows_of(derived.heights) is None
+    assert _same(topographic_map(derived, **kwargs).compute(), windowed)
 
 
 def test_topographic_map_relief_halo_is_exact(hugo, monkeypatch):
