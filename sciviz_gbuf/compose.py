@@ -22,6 +22,7 @@ __all__ = [
     "montage",
     "normals_to_rgb",
     "to_uint8",
+    "with_colorbar",
     "write_geotiff",
     "write_png",
 ]
@@ -266,4 +267,108 @@ def montage(
         oy = y0 + text_h + padding + (tile_h - tile.shape[0]) // 2
         ox = x0 + (tile_w - tile.shape[1]) // 2
         canvas.paste(Image.fromarray(tile), (ox, oy))
+    return np.asarray(canvas, dtype=np.float32) / np.float32(255.0)
+
+
+def _ticks(lo: float, hi: float, n: int = 5) -> list[float]:
+    """About ``n`` round tick values within [lo, hi] (1, 2, 5 times a power of ten apart)."""
+    if not hi > lo:
+        return [lo]
+    raw = (hi - lo) / max(1, n - 1)
+    power = 10.0 ** math.floor(math.log10(raw))
+    step = next(m * power for m in (1.0, 2.0, 5.0, 10.0) if m * power >= raw)
+    first = math.ceil(lo / step - 1e-9) * step
+    out = []
+    k = 0
+    while first + k * step <= hi + 1e-9 * step and k < 50:
+        out.append(first + k * step)
+        k += 1
+    return out
+
+
+def _tick_text(v: float, step: float) -> str:
+    if v == 0.0:
+        return "0"
+    if abs(v) >= 1e5 or abs(v) < 1e-3:
+        return f"{v:.2g}"
+    digits = max(0, -math.floor(math.log10(step))) if step > 0 else 0
+    return f"{v:.{digits}f}"
+
+
+def with_colorbar(
+    image: np.ndarray,
+    *,
+    cmap: str | object = "viridis",
+    vmin: float,
+    vmax: float,
+    label: str,
+    background: _Colour = (1.0, 1.0, 1.0),
+) -> np.ndarray:
+    """``image`` with a horizontal colour bar below it: the colour map from ``vmin`` to
+    ``vmax`` with round tick values and ``label`` (what the colours measure, with its unit).
+
+    Parameters
+    ----------
+    image : (H, W, 3) or (H, W) image
+        Any form :func:`write_png` accepts: e.g. the output of :func:`colorize` made with the
+        same ``cmap``, ``vmin`` and ``vmax``.
+    cmap : str or matplotlib.colors.Colormap, default: "viridis"
+    vmin, vmax : float
+        The values at the two ends of the colour map (``vmin < vmax``; equal values draw one
+        tick).
+    label : str
+        E.g. ``"depth (scene units)"``, ``"elevation (m)"``.
+    background : RGB triple in [0, 1], default: white
+
+    Returns
+    -------
+    (H + bar, W, 3) float32 ndarray in [0, 1]
+        The image unchanged on top; the bar (about a twelfth of the height, at least 34 px)
+        below, its ticks and label in black with Pillow's default font.
+    """
+    from PIL import Image, ImageDraw, ImageFont
+
+    rgb = _as_rgb(image, "image")
+    lo, hi = (_validate.finite(v, n) for v, n in ((vmin, "vmin"), (vmax, "vmax")))
+    if lo > hi:
+        raise InputError(f"vmin, vmax: expected vmin <= vmax, got {lo} > {hi}")
+    if not isinstance(label, str):
+        raise InputError(f"label: expected a string, got {type(label).__name__}")
+    cm = _validate.colormap(cmap)
+    bg = tuple(int(c) for c in to_uint8(_validate.rgb(background, "background")[None, None])[0, 0])
+    h, w = rgb.shape[:2]
+    try:
+        font = ImageFont.load_default(size=max(10, min(18, h // 28)))
+    except (TypeError, ImportError):
+        font = ImageFont.load_default()
+    probe = ImageDraw.Draw(Image.new("RGB", (1, 1)))
+    text_h = probe.textbbox((0, 0), "Ag", font=font)[3]
+    margin = max(6, w // 40)
+    bar_h = max(6, text_h // 2 + 2)
+    strip_h = 3 + bar_h + 2 + text_h + 2 + text_h + 3
+    canvas = Image.new("RGB", (w, h + strip_h), bg)
+    canvas.paste(Image.fromarray(rgb), (0, 0))
+    x0, x1 = margin, max(margin + 2, w - margin)
+    t = np.linspace(0.0, 1.0, x1 - x0)
+    colours = to_uint8(np.asarray(cm(t), np.float32)[None, :, :3])
+    bar = np.repeat(colours, bar_h, axis=0)
+    y0 = h + 3
+    canvas.paste(Image.fromarray(bar), (x0, y0))
+    draw = ImageDraw.Draw(canvas)
+    draw.rectangle((x0 - 1, y0 - 1, x1, y0 + bar_h), outline=(0, 0, 0))
+    ticks = _ticks(lo, hi)
+    step = ticks[1] - ticks[0] if len(ticks) > 1 else 0.0
+    last_end = -1e9
+    for v in ticks:
+        x = x0 + (0.5 if hi == lo else (v - lo) / (hi - lo)) * (x1 - x0 - 1)
+        draw.line((x, y0 + bar_h, x, y0 + bar_h + 2), fill=(0, 0, 0))
+        text = _tick_text(v, step)
+        tw = draw.textlength(text, font=font)
+        tx = min(max(0.0, x - tw / 2), w - tw)
+        if tx > last_end + 4:  # never overprint a neighbour's label
+            draw.text((tx, y0 + bar_h + 2), text, fill=(0, 0, 0), font=font)
+            last_end = tx + tw
+    text = _fit_text(draw, label, font, w - 2 * margin)
+    tw = draw.textlength(text, font=font)
+    draw.text(((w - tw) / 2, y0 + bar_h + 4 + text_h), text, fill=(0, 0, 0), font=font)
     return np.asarray(canvas, dtype=np.float32) / np.float32(255.0)

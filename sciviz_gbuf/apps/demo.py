@@ -27,7 +27,7 @@ import pyvista as pv
 
 from .. import styles
 from .._atomic import atomic_output
-from ..compose import colorize, ids_to_rgb, montage, normals_to_rgb, write_png
+from ..compose import colorize, ids_to_rgb, montage, normals_to_rgb, with_colorbar, write_png
 from ..core.capture import capture, check_window_size
 from ..core.gbuffer import GBuffer
 from ..datasets import load_frog_skeleton, load_jacksboro_dem, load_jacksboro_terrain, load_nut
@@ -85,6 +85,10 @@ class _Scene:
     scalars: tuple[str, ...] = ()
     # (azimuth, altitude) in degrees of a world-space sun for the shade; None: eye-space light
     sun: tuple[float, float] | None = None
+    # Units of the colour bars: lengths (depth, world x, y), world z, the scalars.
+    units: str = "scene units"
+    z_units: str = "scene units"
+    scalar_units: str = "data units"
     # Filled in by _write_scene, read by _write_index.
     images: list[tuple[str, Path]] = field(default_factory=list)
     files: list[Path] = field(default_factory=list)
@@ -113,6 +117,9 @@ def _scenes(aspect: float) -> list[_Scene]:
             camera=terrain_birdseye_camera(terrain.bounds, aspect=aspect),
             scalars=("elevation",),
             sun=(315.0, 45.0),
+            units="m",
+            z_units="m, exaggerated 2x",
+            scalar_units="m",
         ),
     ]
 
@@ -127,17 +134,35 @@ def _shade(g: GBuffer, scene: _Scene) -> np.ndarray:
     return lambert(g.world_normal(), light=sun, ambient=0.0)
 
 
+def _scalar_image(values: np.ndarray, cmap: str, label: str, **limits: float) -> np.ndarray:
+    """A scalar channel through ``cmap`` with its colour bar (the range of its finite values,
+    or ``limits`` vmin/vmax) labelled with what it measures and its unit."""
+    finite = values[np.isfinite(values)]
+    lo = float(limits.get("vmin", finite.min() if finite.size else 0.0))
+    hi = float(limits.get("vmax", finite.max() if finite.size else 1.0))
+    rgb = colorize(values, cmap=cmap, vmin=lo, vmax=max(lo, hi))
+    return with_colorbar(rgb, cmap=cmap, vmin=lo, vmax=max(lo, hi), label=label)
+
+
 def _channel_images(g: GBuffer, scene: _Scene) -> list[tuple[str, str, np.ndarray]]:
-    """``(key, caption, image)`` of every channel of ``g``."""
+    """``(key, caption, image)`` of every channel of ``g``; scalar channels with a colour
+    bar in their units."""
+    u = scene.units
     out = [
-        ("depth", CAPTIONS["depth"], colorize(g.depth)),
-        ("sz", CAPTIONS["sz"], colorize(g.sz)),
+        ("depth", CAPTIONS["depth"], _scalar_image(g.depth, "viridis", f"depth ({u})")),
+        ("sz", CAPTIONS["sz"], _scalar_image(g.sz, "viridis", "sz = d²/(w z) (px)")),
         ("normal", CAPTIONS["normal"], normals_to_rgb(g.normal)),
-        ("shade", scene.shade_caption, colorize(_shade(g, scene), cmap="gray", vmin=0, vmax=1)),
+        (
+            "shade",
+            scene.shade_caption,
+            _scalar_image(_shade(g, scene), "gray", "shade N·L (0 to 1)", vmin=0.0, vmax=1.0),
+        ),
     ]
     for i, axis in enumerate("xyz"):
         key = f"world_{axis}"
-        out.append((key, CAPTIONS[key], colorize(g.world[..., i], cmap="plasma")))
+        unit = scene.z_units if axis == "z" else u
+        label = f"world {axis} ({unit})"
+        out.append((key, CAPTIONS[key], _scalar_image(g.world[..., i], "plasma", label)))
     out += [
         ("object_id", CAPTIONS["object_id"], ids_to_rgb(g.object_id)),
         ("cell_id", CAPTIONS["cell_id"], ids_to_rgb(g.cell_id)),
@@ -146,7 +171,8 @@ def _channel_images(g: GBuffer, scene: _Scene) -> list[tuple[str, str, np.ndarra
     for name, values in g.scalars.items():
         if values.ndim == 2:  # multi-component arrays have no single colour map
             caption = f"scalars {name}: the point array {name!r} interpolated (terrain)"
-            out.append((f"scalars_{name}", caption, colorize(values, cmap="terrain")))
+            image = _scalar_image(values, "terrain", f"{name} ({scene.scalar_units})")
+            out.append((f"scalars_{name}", caption, image))
     return out
 
 
@@ -380,6 +406,15 @@ SURFACE_CAPTIONS = {
 SEAM_VIEW = ((1.0, -1.2, 4.0), (1.0, 0.75, 0.6), (0.0, 1.0, 0.0))
 
 
+def _curvature_panel(gb: GBuffer, options: dict) -> np.ndarray:
+    """A curvature panel with its colour bar: C1 and C2 share one fixed scale (the
+    ``curvature_limit``), so their colours compare."""
+    limit = float(options["curvature_limit"])
+    image = surface_analysis(gb, mode="curvature", **options)
+    label = f"mean curvature H (1 / patch units), clipped at ±{limit:g} in both panels"
+    return with_colorbar(image, cmap="RdBu_r", vmin=-limit, vmax=limit, label=label)
+
+
 def surface_panels(window_size: tuple[int, int]) -> list[Panel]:
     """The 1990 Fig. 15 panels on two bicubic patches built in code (C1 and C2 joins)."""
     opts = {"axis": (1.0, 0.4, 0.0), "stripes": 24, "background": (1.0, 1.0, 1.0)}
@@ -396,8 +431,8 @@ def surface_panels(window_size: tuple[int, int]) -> list[Panel]:
         ("b_reflection_c2", "reflection lines, C2", surface_analysis(c2, **opts)),
         ("zebra_c1", "zebra, C1", surface_analysis(c1, mode="stripes", **opts)),
         ("zebra_c2", "zebra, C2", surface_analysis(c2, mode="stripes", **opts)),
-        ("curvature_c1", "mean curvature, C1", surface_analysis(c1, mode="curvature", **curv)),
-        ("curvature_c2", "mean curvature, C2", surface_analysis(c2, mode="curvature", **curv)),
+        ("curvature_c1", "mean curvature, C1", _curvature_panel(c1, curv)),
+        ("curvature_c2", "mean curvature, C2", _curvature_panel(c2, curv)),
         ("isophotes_c1", "isophotes, C1", surface_analysis(c1, mode="isophote", **iso)),
     ]
 
@@ -538,51 +573,91 @@ def _camera_text(g: GBuffer) -> list[str]:
 
 
 _STYLE = (
-    "body{font-family:sans-serif;margin:2em;max-width:110em}"
-    "figure{display:inline-block;margin:0 1em 1em 0;vertical-align:top}"
-    "figcaption{font-size:90%;max-width:40em}img{border:1px solid #ccc}"
+    "body{font-family:sans-serif;margin:0;color:#222}"
+    "nav{position:sticky;top:0;z-index:1;background:#f6f6f6;border-bottom:1px solid #ccc;"
+    "padding:.5em 1em;font-size:90%;line-height:1.8}"
+    "nav a{margin-right:1em;white-space:nowrap}"
+    "main{padding:0 1.5em 2em;max-width:100%;box-sizing:border-box}"
+    "section{scroll-margin-top:5em}"
+    ".grid{display:grid;grid-template-columns:repeat(auto-fill,minmax(230px,1fr));gap:14px}"
+    "figure{margin:0}figure img{width:100%;height:auto;border:1px solid #ccc;display:block}"
+    "figcaption{font-size:85%;margin-top:.3em}details{margin:.5em 0 1em;font-size:90%}"
+    "p.intro{max-width:60em}"
 )
+
+
+def _section_id(name: str) -> str:
+    return "s-" + "".join(c if c.isalnum() else "-" for c in name)
+
+
+def _details(lines: list[str]) -> str:
+    esc = html.escape
+    body = "<br>".join(esc(line) for line in lines)
+    return f"<details><summary>capture, camera and timings</summary>{body}</details>"
 
 
 def _scene_html(scene: _Scene) -> str:
     assert scene.gbuffer is not None and scene.npz is not None
     esc = html.escape
     npz = scene.npz.name
-    parts = [f"<h2>{esc(scene.title)}</h2>", f"<p>{esc(repr(scene.gbuffer))}</p>", "<p>Camera: "]
-    parts.append("<br>".join(esc(line) for line in _camera_text(scene.gbuffer)) + "</p>")
     timing = ", ".join(f"{k} {v:.2f} s" for k, v in scene.timings.items())
-    parts.append(f"<p>Timings: {esc(timing)}</p>")
-    parts.append(f'<p>G-buffer: <a href="{esc(npz)}">{esc(npz)}</a> (GBuffer.load)</p>')
-    return "\n".join(parts + _figures_html(scene.images))
+    lines = [repr(scene.gbuffer), "Camera:", *_camera_text(scene.gbuffer), f"Timings: {timing}"]
+    parts = [
+        f'<section id="{_section_id(scene.name)}"><h2>{esc(scene.title)}</h2>',
+        f'<p>G-buffer: <a href="{esc(npz)}">{esc(npz)}</a> (GBuffer.load)</p>',
+        _details(lines),
+    ]
+    return "\n".join([*parts, _grid_html(scene.images), "</section>"])
 
 
-def _figures_html(images: list[tuple[str, Path]]) -> list[str]:
+def _grid_html(images: list[tuple[str, Path]]) -> str:
+    """Thumbnails in a grid, each a link to its full-size PNG, captioned."""
     esc = html.escape
-    return [
-        f'<figure><figcaption>{esc(caption)}</figcaption><img src="{esc(path.name)}" '
-        f'alt="{esc(caption)}"></figure>'
+    items = [
+        f'<figure><a href="{esc(path.name)}"><img src="{esc(path.name)}" alt="{esc(caption)}" '
+        f'loading="lazy"></a><figcaption>{esc(caption)}</figcaption></figure>'
         for caption, path in images
     ]
+    return '<div class="grid">\n' + "\n".join(items) + "\n</div>"
 
 
 def _figure_html(fig: _Figure) -> str:
     esc = html.escape
-    parts = [f"<h2>{esc(fig.title)}</h2>", f"<p>{esc(fig.intro)}</p>"]
-    if fig.gbuffer is not None:
-        parts.append(f"<p>{esc(repr(fig.gbuffer))}</p><p>Camera: ")
-        parts.append("<br>".join(esc(line) for line in _camera_text(fig.gbuffer)) + "</p>")
     timing = ", ".join(f"{k} {v:.2f} s" for k, v in fig.timings.items())
-    parts.append(f"<p>Timings: {esc(timing)}</p>")
-    return "\n".join(parts + _figures_html(fig.images))
+    lines = [] if fig.gbuffer is None else [repr(fig.gbuffer), "Camera:"]
+    if fig.gbuffer is not None:
+        lines += _camera_text(fig.gbuffer)
+    lines.append(f"Timings: {timing}")
+    parts = [
+        f'<section id="{_section_id(fig.name)}"><h2>{esc(fig.title)}</h2>',
+        f'<p class="intro">{esc(fig.intro)}</p>',
+        _details(lines),
+    ]
+    return "\n".join([*parts, _grid_html(fig.images), "</section>"])
+
+
+def _nav_html(scenes: list[_Scene], figures: list[_Figure]) -> str:
+    esc = html.escape
+    links = [(s.name, s.title.split(",")[0]) for s in scenes]
+    for f in figures:  # "fig3" + "Edges: ..." -> "Fig. 3 edges"
+        topic = f.title.split(":")[0]
+        label = f"Fig. {f.name[3:]} {topic.lower()}" if f.name[3:].isdigit() else topic
+        links.append((f.name, label))
+    items = " ".join(f'<a href="#{_section_id(n)}">{esc(t)}</a>' for n, t in links)
+    return f"<nav>{items}</nav>"
 
 
 def _write_index(scenes: list[_Scene], figures: list[_Figure], outdir: Path) -> Path:
     body = "\n".join([_scene_html(s) for s in scenes] + [_figure_html(f) for f in figures])
     page = (
         '<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
+        '<meta name="viewport" content="width=device-width, initial-scale=1">'
         f"<title>sciviz_gbuf demo</title><style>{_STYLE}</style></head><body>\n"
+        f"{_nav_html(scenes, figures)}\n<main>\n"
         "<h1>sciviz_gbuf demo: G-buffers, edges and contours of bundled sample data</h1>\n"
-        f"{body}\n</body></html>\n"
+        "<p>Click a picture for its full-size PNG. Scalar channels carry a colour bar in their "
+        "units.</p>\n"
+        f"{body}\n</main></body></html>\n"
     )
     path = outdir / "index.html"
     data = page.encode("utf-8")

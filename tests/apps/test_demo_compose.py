@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import re
+import shutil
+from pathlib import Path
 
 import matplotlib
 import numpy as np
@@ -248,6 +250,10 @@ def test_birdseye_camera_is_south_east_and_above():
 
 # ---------------------------------------------------------------------------- run_demo
 WINDOW = (160, 120)
+# Scalar panels (scene channels and curvature maps) carry a colour bar in their units.
+COLOUR_BAR = re.compile(
+    r"^(nut|terrain)_(depth|sz|shade|world_[xyz]|scalars_\w+)\.png$|^fig15_curv"
+)
 
 
 @pytest.fixture(scope="module")
@@ -281,6 +287,8 @@ def test_run_demo_files(demo):
                 assert im.size == (min(WINDOW), min(WINDOW))
             elif p.name == "fig12_topo.png":  # the plan-view map: one pixel per DEM cell
                 assert im.size == (403, 344)
+            elif COLOUR_BAR.search(p.name):  # a scalar panel: its colour bar below
+                assert im.size[0] == WINDOW[0] and im.size[1] > WINDOW[1], p.name
             else:
                 assert im.size == WINDOW
     page = (outdir / "index.html").read_text(encoding="utf-8")
@@ -403,3 +411,89 @@ def test_run_demo_terrain_figure(demo):
     assert sumi.min() < 120  # and ink
     page = (outdir / "index.html").read_text(encoding="utf-8")
     assert "Fig. 12" in page and "sumi-e" in page
+
+
+def test_with_colorbar_keeps_the_image_and_draws_the_map_and_ticks():
+    from sciviz_gbuf.compose import with_colorbar
+
+    v = np.linspace(0.0, 3.0, 200 * 150, dtype=np.float32).reshape(150, 200)
+    rgb = colorize(v, cmap="viridis", vmin=0.0, vmax=3.0)
+    out = with_colorbar(rgb, cmap="viridis", vmin=0.0, vmax=3.0, label="depth (m)")
+    assert out.shape[1] == 200 and out.shape[0] > 150
+    np.testing.assert_allclose(out[:150], np.round(rgb * 255) / 255, atol=1e-6)
+    strip = out[150:]
+    # the bar: a row whose colours run from viridis(0) on the left to viridis(1) on the right
+    from matplotlib import colormaps
+
+    lo, hi = np.asarray(colormaps["viridis"]([0.0, 1.0]))[:, :3]
+    rows = [
+        k
+        for k, r in enumerate(strip)
+        if np.abs(r[7] - lo).max() < 0.05 and np.abs(r[-8] - hi).max() < 0.05
+    ]
+    assert len(rows) >= 4, "no colour-map bar in the strip"
+    bar = strip[rows[len(rows) // 2], 7:-7]
+    t = np.linspace(0.0, 1.0, len(bar))
+    np.testing.assert_allclose(bar, np.asarray(colormaps["viridis"](t))[:, :3], atol=0.05)
+    # black text (ticks and label) below the bar
+    below = strip[rows[-1] + 2 :]
+    assert (below.max(axis=2) < 0.3).sum() > 30
+    with pytest.raises(InputError, match="vmin"):
+        with_colorbar(rgb, vmin=2.0, vmax=1.0, label="x")
+    with pytest.raises(InputError, match="label"):
+        with_colorbar(rgb, vmin=0.0, vmax=1.0, label=3)
+
+
+_CHROMIUM = shutil.which("chromium")
+_CHROMEDRIVER = shutil.which("chromedriver") or (
+    "/usr/bin/chromedriver" if Path("/usr/bin/chromedriver").exists() else None
+)
+
+
+@pytest.mark.skipif(
+    _CHROMIUM is None or _CHROMEDRIVER is None,
+    reason="needs Debian's chromium and chromium-driver (apt-get install chromium chromium-driver)",
+)
+def test_gallery_is_a_navigable_grid_in_a_real_browser(demo):
+    """The gallery in Chromium at 1400x900: no horizontal overflow, a page a few screens tall
+    (it was one 60,000 px column), every thumbnail a link to its full-size PNG, every nav link
+    to a section of the page."""
+    pytest.importorskip("selenium")
+    from selenium import webdriver
+    from selenium.webdriver.chrome.service import Service
+
+    outdir, _ = demo
+    opts = webdriver.ChromeOptions()
+    for a in ("--headless=new", "--no-sandbox", "--disable-gpu", "--window-size=1400,900"):
+        opts.add_argument(a)
+    opts.binary_location = _CHROMIUM
+    driver = webdriver.Chrome(options=opts, service=Service(_CHROMEDRIVER))
+    try:
+        driver.get((outdir / "index.html").as_uri())
+        width = driver.execute_script("return document.documentElement.clientWidth")
+        assert driver.execute_script("return document.documentElement.scrollWidth") <= width
+        images = driver.execute_script(
+            "return [...document.images].map(i => [i.getAttribute('src'), "
+            "i.closest('a') && i.closest('a').getAttribute('href'), "
+            "i.getBoundingClientRect().width, i.closest('figure').innerText]);"
+        )
+        assert len(images) > 60
+        for src, href, shown, caption in images:
+            assert href == src and (outdir / src).is_file()
+            assert 150 <= shown <= 700, (src, shown)  # thumbnails, several per row
+            assert caption.strip()
+        height = driver.execute_script("return document.documentElement.scrollHeight")
+        rows = driver.execute_script(
+            "return new Set([...document.images].map(i => Math.round(i.getBoundingClientRect()"
+            ".top + window.scrollY))).size"
+        )
+        assert rows < len(images) / 3  # a grid: at least three thumbnails a row on average
+        assert height < 60 * 900 / 4, height
+        targets = driver.execute_script(
+            "return [...document.querySelectorAll('nav a')].map(a => a.getAttribute('href'));"
+        )
+        assert len(targets) >= 10
+        for t in targets:
+            assert driver.execute_script(f"return !!document.querySelector('{t}');"), t
+    finally:
+        driver.quit()
