@@ -46,6 +46,11 @@ __all__ = [
 
 #: Warm rice-paper white of the sumi-e.
 PAPER = (0.96, 0.94, 0.88)
+# mx4: share of white mixed into the lit colour bands, the contour colour's brightness ...
+_MX4_WASH = 0.4
+_MX4_LINE_SHADE = 0.5
+# ... and the contours' opacity there: the profiles stay the strongest lines.
+_MX4_LINE_INK = 0.75
 # A surface of at most about this many points is rendered (every step-th DEM cell): finer than
 # the pixels of any usual window, and VTK renders it in well under a second.
 _MAX_POINTS = 2_000_000
@@ -241,14 +246,19 @@ def birdseye_panels(
     flat = np.float32(max(np.sin(np.radians(alt)), 1e-3))
     coloured = lit(lay["bands"], relief_light(lay["sh"] / flat))
     white = np.ones_like(lay["bands"])
+    # mx4 carries four layers: the bands and relief are washed towards white and the contours
+    # drawn darker (and a little translucent), so the lines read on dark brown slopes too
+    washed = coloured + np.float32(_MX4_WASH) * (white - coloured)
+    dark = colour * np.float32(_MX4_LINE_SHADE)
     cn, pr = lay["cn"][..., None], lay["pr"][..., None]
+    cn4 = cn * np.float32(_MX4_LINE_INK)
     grey = np.clip(0.2 + 0.8 * lay["sh"], 0.0, 1.0)[..., None] * white
     images = {
         "cn": white * (1.0 - cn) + colour * cn,
         "pr": white * (1.0 - pr),
         "sh": grey,
         "mx2": grey * (1.0 - pr),
-        "mx4": (coloured * (1.0 - cn) + colour * cn) * (1.0 - pr),
+        "mx4": (washed * (1.0 - cn4) + dark * cn4) * (1.0 - pr),
     }
     return {key: rgba(img, lay["alpha"], background) for key, img in images.items()}
 
@@ -347,7 +357,7 @@ def sumi_e(
     interval: float | None = None,
     profile_width: float = 2.0,
     wash: float = 12.0,
-    mist: float = 0.6,
+    mist: float = 0.4,
     paper: Sequence[float] | None = PAPER,
     progress_bar: bool = False,
 ) -> np.ndarray:
@@ -367,7 +377,7 @@ def sumi_e(
         Width of the ridge lines in output pixels.
     wash : float, default: 12
         Pixels over which the wash below a ridge line fades (0: no wash).
-    mist : float in [0, 1], default: 0.6
+    mist : float in [0, 1], default: 0.4
         How much the ink fades in the lowest ground (0: none).
     paper : RGB or None, default: :data:`PAPER`
         Paper colour; it fills the sky opaquely. None: a transparent sky.
@@ -401,7 +411,8 @@ def sumi_e(
             bands=False,
         )
         alpha = lay["alpha"]
-        near = 1.0 - 0.75 * np.nan_to_num(lay["depth"], nan=1.0)
+        # ink strong enough to read at the far edge and in the valleys too
+        near = 1.0 - 0.5 * np.nan_to_num(lay["depth"], nan=1.0)
         wz = lay["wz"]
         fin = np.isfinite(wz)
         if fin.any():
@@ -410,9 +421,9 @@ def sumi_e(
         else:
             high = np.zeros_like(wz)
         fade = near * (1.0 - mist + mist * np.sqrt(np.clip(high, 0.0, 1.0)))
-        ink = np.maximum(lay["pr"], 0.35 * lay["cn"])
+        ink = np.maximum(lay["pr"], 0.5 * lay["cn"])
         if wash > 0:
-            ink = np.maximum(ink, 0.3 * _wash_below(lay["pr"], wash))
+            ink = np.maximum(ink, 0.35 * _wash_below(lay["pr"], wash))
         ink = np.clip(ink * fade, 0.0, 1.0) * np.minimum(alpha * 4.0, 1.0)
         # Sumi ink is a warm black; the paper shows through in proportion.
         sumi = np.float32([0.08, 0.07, 0.06])

@@ -18,6 +18,10 @@ def compose_kernel(
     toon_bg,
     hatch_sc,
     hatch_spacing,
+    hatch_tau,
+    hatch_left,
+    hatch_ink,
+    halo_core,
     shade_c,
     layer,
     emap,
@@ -30,7 +34,8 @@ def compose_kernel(
 ):
     """One pass per pixel: the style's base colour from ``N.L`` (``mode``, see ``FUSED_MODES``),
     then the edge map (``emap``, empty: none), the band ``tint`` and contour ``ink`` (empty:
-    none), to uint8 ``out``. ``layer``: the lines style's ink or hatch's profile ink."""
+    none), to uint8 ``out``. ``layer``: the lines style's ink or hatch's profile ink (hatch:
+    strokes give way to paper within one pixel of it, as ``profile_halo``)."""
     h, w = mask.shape
     lx, ly, lz = light[0], light[1], light[2]
     use_emap = emap.shape[0] > 0
@@ -74,15 +79,21 @@ def compose_kernel(
                     y = np.float64(h - 1 - i)
                     x = np.float64(j)
                     for f in range(n_fam):
-                        f0 = np.float32(f) / np.float32(n_fam)
-                        top = min(tone, f0 + np.float32(1.0 / n_fam))
-                        cov = min(max((top - f0) / (one - f0), zero), one)
+                        top = min(tone, hatch_tau[f + 1])
+                        cov = one - (one - hatch_ink * top) / hatch_left[f]
+                        cov = min(max(cov, zero), one)
                         c = (-x * hatch_sc[0, f] + y * hatch_sc[1, f]) / hatch_spacing
                         dist = np.float32(abs((c - np.rint(c)) * hatch_spacing))
                         wd = max(cov * np.float32(hatch_spacing), zero)
                         a = max((wd + one) * np.float32(0.5), one)
                         left *= one - min(wd, one) * min(max(a - dist, zero), one)
-                    r = g = b = left
+                    # the profile halo: no strokes within one pixel of a profile
+                    halo = zero
+                    if layer[i, j] < halo_core:
+                        for di in range(max(i - 1, 0), min(i + 2, h)):
+                            for dj in range(max(j - 1, 0), min(j + 2, w)):
+                                halo = max(halo, layer[di, dj])
+                    r = g = b = one - (one - left) * (one - halo)
             elif mode == 1:
                 r, g, b = consts_gooch[2, 0], consts_gooch[2, 1], consts_gooch[2, 2]
             elif mode == 2:

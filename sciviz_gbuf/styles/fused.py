@@ -17,7 +17,7 @@ import numpy as np
 
 from ..filters.edges import INNER_COLOR, PROFILE_COLOR
 from . import _fused_kernels as _fk
-from .hatch import HATCH_ANGLES, HATCH_SPACING
+from .hatch import HALO_CORE, HATCH_ANGLES, HATCH_MAX_INK, HATCH_SPACING, family_thresholds
 from .illustration import PAPER, SHADE_AMBIENT, SHADE_HIGHLIGHT
 from .registry import check_style
 from .tone import (
@@ -52,6 +52,7 @@ def fused_constants() -> dict:
         TOON_BASE, np.float64
     )[None, :]
     angles = np.radians(np.asarray(HATCH_ANGLES, np.float64))
+    tau, left, _ = family_thresholds(len(HATCH_ANGLES), HATCH_MAX_INK)
 
     def pair(inner: Sequence[float], profile: Sequence[float]) -> tuple[np.ndarray, np.ndarray]:
         return np.asarray(inner, f32), np.asarray(profile, f32)
@@ -69,6 +70,10 @@ def fused_constants() -> dict:
         "toon_bg": np.asarray(PAPER, f32),
         "hatch": np.stack([np.sin(angles), np.cos(angles)]).astype(np.float64),
         "hatch_spacing": np.float64(HATCH_SPACING),
+        "hatch_tau": tau,
+        "hatch_left": left,
+        "hatch_ink": np.float32(HATCH_MAX_INK),
+        "halo_core": np.float32(HALO_CORE),
         "shade": np.asarray([SHADE_AMBIENT, SHADE_HIGHLIGHT], f32),
     }
 
@@ -137,6 +142,10 @@ def fused_style(
         c["toon_bg"],
         c["hatch"],
         c["hatch_spacing"],
+        c["hatch_tau"],
+        c["hatch_left"],
+        c["hatch_ink"],
+        c["halo_core"],
         c["shade"],
         _f32(layer, _EMPTY2),
         _f32(emap, _EMPTY3),

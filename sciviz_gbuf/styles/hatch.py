@@ -6,19 +6,31 @@ and a *smooth threshold function* that turns tone and priority into antialiased 
 binary dither. Here the stroke texture is procedural and evaluated per pixel from the G-buffer:
 
 * the tone is ``t = 1 - shade`` with the Lambert shade of the eye-space normals (1990 §4.2 sh);
+* the families together cover the fraction ``m t`` of the paper, ``m = max_ink`` < 1: even the
+  darkest tone keeps a share ``1 - m`` of paper between the strokes, so a face in shadow stays
+  hatched (its strokes, outlines and the direction of the hatching readable) instead of
+  turning solid black;
 * stroke family ``f`` (``angles[f]``, in priority order) is a set of parallel strokes
-  ``spacing`` pixels apart; it switches on when ``t`` passes ``f / N`` and its stroke width
-  grows continuously with ``t`` (Freudenberg's smooth threshold), so ink never decreases as the
-  tone rises;
-* the width of family ``f`` is chosen so that the union of the families covers the fraction
-  ``t`` of the paper: with families at different angles overlapping independently,
-  ``1 - prod(1 - c_f) = t`` when family ``f`` covers ``c_f = (t - f/N) / (1 - f/N)`` on
-  ``[f/N, (f+1)/N]`` (and stays at its final coverage ``1 / (N - f)`` beyond);
+  ``spacing`` pixels apart; it switches on when ``t`` passes its threshold ``tau_f`` and its
+  stroke width grows continuously with ``t`` (Freudenberg's smooth threshold), so ink never
+  decreases as the tone rises;
+* darker tones add families (cross-hatching) rather than widening strokes until they merge:
+  every family grows to the same final coverage ``a = 1 - (1 - m)^(1/N)`` (with the defaults a
+  quarter of the spacing, 1.6 px strokes and 4.4 px of paper between them). With families at
+  different angles overlapping independently the union is ``1 - prod(1 - c_f)``, so family
+  ``f`` covers ``c_f = 1 - (1 - m t) / (1 - a)^f`` on ``[tau_f, tau_(f+1)]`` with
+  ``tau_f = (1 - (1 - a)^f) / m``: the union is ``m t`` exactly;
+* where the strokes crowd on screen (``"uv"`` strokes near a silhouette or a pole of the
+  parameterisation, where their local period shrinks towards a pixel) they fade out between a
+  period of :data:`CROWD_FULL` and :data:`CROWD_NONE` output pixels, so they never merge into a
+  solid area;
 * ink falls off over one pixel at the stroke's edges, measured as the distance in pixels to
   the stroke centre, so strokes are antialiased at any width (a stroke thinner than a pixel is
   drawn one pixel wide at proportionally less ink, keeping its ink per length).
 
-The profile edges of the G-buffer are then drawn black on top (the 2003 edge enhancement).
+The profile edges of the G-buffer are then drawn black on top (the 2003 edge enhancement),
+with a one-pixel halo of paper on either side that keeps the strokes off them: outlines stay
+visible over the darkest hatching.
 """
 
 from __future__ import annotations
@@ -26,6 +38,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
+from scipy import ndimage
 
 from .. import _validate
 from ..core.gbuffer import GBuffer, check_gbuffer
@@ -35,10 +48,17 @@ from .illustration import LIGHT, PAPER
 from .registry import register
 
 __all__ = [
+    "CROWD_FULL",
+    "CROWD_NONE",
+    "HALO_CORE",
     "HATCH_ANGLES",
+    "HATCH_MAX_INK",
     "HATCH_SPACING",
     "SPACES",
+    "crowding",
+    "family_thresholds",
     "hatch",
+    "profile_halo",
     "stroke_ink",
     "tone_coverage",
 ]
@@ -49,6 +69,15 @@ SPACES = ("screen", "uv")
 #: families in order of priority (the first covers the lightest tones).
 HATCH_SPACING = 6.0
 HATCH_ANGLES = (45.0, -45.0, 0.0, 90.0)
+#: :func:`hatch` default: the share of the paper the strokes cover at the darkest tone.
+HATCH_MAX_INK = 0.7
+#: Profile ink from which a pixel counts as part of the line (no halo there, see
+#: :func:`profile_halo`).
+HALO_CORE = 0.25
+#: Local stroke period, in output pixels, above which strokes are drawn in full ...
+CROWD_FULL = 3.0
+#: ... and below which they are left out (they would merge with their neighbours).
+CROWD_NONE = 1.5
 # More families than this do not darken anything further and only cost time.
 _MAX_FAMILIES = int(_validate.LIMITS["families"])
 
@@ -65,17 +94,41 @@ def _angles(value) -> np.ndarray:
     return np.radians(a)
 
 
-def tone_coverage(tone: np.ndarray, n_families: int) -> np.ndarray:
+def family_thresholds(n_families: int, max_ink: float = HATCH_MAX_INK):
+    """Thresholds and paper shares of the prioritised stroke families (see the module notes).
+
+    Returns
+    -------
+    tau : (N + 1,) float32
+        Family ``f`` switches on at ``tau[f]`` and is complete at ``tau[f + 1]``
+        (``tau[0] = 0``, ``tau[N] = 1``).
+    left : (N,) float32
+        ``(1 - a)^f``: the paper the families before ``f`` leave when all are complete.
+    a : float
+        The final coverage of every family, ``1 - (1 - max_ink)^(1 / N)``.
+    """
+    n, m = int(n_families), float(max_ink)
+    a = 1.0 - (1.0 - m) ** (1.0 / n)
+    left = (1.0 - a) ** np.arange(n + 1, dtype=np.float64)
+    tau = np.clip((1.0 - left) / m, 0.0, 1.0)
+    tau[-1] = 1.0
+    return tau.astype(np.float32), left[:-1].astype(np.float32), a
+
+
+def tone_coverage(tone: np.ndarray, n_families: int, max_ink: float = HATCH_MAX_INK) -> np.ndarray:
     """Paper fraction ``c_f`` each stroke family covers at tone ``t`` (prioritised thresholds).
 
-    Family ``f`` switches on at ``t = f / N`` and grows to ``1 / (N - f)`` at ``(f + 1) / N``,
-    so that ``1 - prod_f (1 - c_f) = t``: the families together cover the tone.
+    Family ``f`` switches on at ``t = tau_f`` (:func:`family_thresholds`) and grows to the
+    common final coverage ``a`` at ``tau_(f+1)``, so that ``1 - prod_f (1 - c_f) = max_ink t``:
+    the families together cover the tone, scaled so that the darkest tone keeps ``1 - max_ink``
+    of paper (cross-hatching, no solid black).
 
     Parameters
     ----------
     tone : (H, W) array in [0, 1]
         ``1 - shade``.
     n_families : int >= 1
+    max_ink : float in (0, 1], default: :data:`HATCH_MAX_INK`
 
     Returns
     -------
@@ -83,9 +136,7 @@ def tone_coverage(tone: np.ndarray, n_families: int) -> np.ndarray:
     """
     t = np.clip(np.asarray(tone, dtype=np.float32), 0.0, 1.0)
     n = int(n_families)
-    f = np.arange(n, dtype=np.float32)[:, None, None] / np.float32(n)
-    top = np.minimum(t, f + np.float32(1.0 / n))  # each family stops growing at its band's end
-    return np.clip((top - f) / (np.float32(1.0) - f), 0.0, 1.0).astype(np.float32)
+    return np.stack([_family_coverage(t, f, n, max_ink) for f in range(n)]).astype(np.float32)
 
 
 def stroke_ink(distance: np.ndarray, width: np.ndarray) -> np.ndarray:
@@ -145,13 +196,32 @@ def _tone(normal: np.ndarray, light: object, mask: np.ndarray) -> np.ndarray:
     return np.subtract(np.float32(1.0), shade, out=shade)
 
 
-def _family_coverage(tone: np.ndarray, f: int, n: int) -> np.ndarray:
-    """Coverage of family ``f`` of ``n`` where it inks (``tone > f / n``): one family of
-    :func:`tone_coverage`, with the same float32 steps."""
-    lo = np.arange(n, dtype=np.float32)[f] / np.float32(n)
-    top = np.minimum(tone, lo + np.float32(1.0 / n))
-    cover = np.clip((top - lo) / (np.float32(1.0) - lo), 0.0, 1.0)
-    return cover.astype(np.float32, copy=False)
+def _family_coverage(tone: np.ndarray, f: int, n: int, max_ink: float) -> np.ndarray:
+    """Coverage of family ``f`` of ``n`` (ink where ``tone > tau_f``): one family of
+    :func:`tone_coverage`, in float32 (the explorer's fused kernel takes the same steps)."""
+    tau, left, _ = family_thresholds(n, max_ink)
+    top = np.minimum(tone, tau[f + 1])  # each family stops growing at its band's end
+    cover = np.float32(1.0) - (np.float32(1.0) - np.float32(max_ink) * top) / left[f]
+    return np.clip(cover, 0.0, 1.0).astype(np.float32, copy=False)
+
+
+def crowding(period: np.ndarray, k: int = 1) -> np.ndarray:
+    """Weight of strokes whose local period is ``period`` buffer pixels (``k`` per output
+    pixel): 1 from :data:`CROWD_FULL` output pixels up, falling linearly to 0 at
+    :data:`CROWD_NONE`, where neighbouring strokes would merge."""
+    lo, hi = np.float32(CROWD_NONE * k), np.float32(CROWD_FULL * k)
+    return np.clip((np.asarray(period, np.float32) - lo) / (hi - lo), 0.0, 1.0)
+
+
+def profile_halo(profile: np.ndarray) -> np.ndarray:
+    """How much the strokes give way to paper next to the profiles: the largest profile ink
+    within one pixel (3 x 3), off the lines' own pixels (ink >= :data:`HALO_CORE`, where the
+    strokes stay and keep an antialiased silhouette dark), so that the profiles stand out
+    over dark hatching."""
+    prof = np.asarray(profile, np.float32)
+    halo = ndimage.maximum_filter(prof, size=3, mode="nearest")
+    halo[prof >= np.float32(HALO_CORE)] = np.float32(0.0)
+    return halo
 
 
 def _uv_stroke(u, v, ux, uy, vx, vy, a: float, scale: float) -> tuple[np.ndarray, np.ndarray]:
@@ -176,6 +246,7 @@ def hatch(
     space: str = "screen",
     spacing: float = HATCH_SPACING,
     angles: Sequence[float] = HATCH_ANGLES,
+    max_ink: float = HATCH_MAX_INK,
     max_width: float | None = None,
     uv_scale: float | None = None,
     edges: bool = True,
@@ -206,17 +277,21 @@ def hatch(
     angles : sequence of 1-16 floats, default: (45, -45, 0, 90)
         Stroke families in priority order: the first darkens the lightest tones. At most
         ``LIMITS["families"]`` = 16.
+    max_ink : float in [0.01, 0.99], default: 0.7
+        Share of the paper the strokes cover at the darkest tone (the tone scale is
+        ``max_ink * t``); every family then grows to ``1 - (1 - max_ink)^(1/N)`` of its
+        spacing, so the darkest tones are cross-hatched with paper between the strokes.
     max_width : float in (0, 64], optional
-        Cap on the stroke width in output pixels (``"uv"``: as a fraction of the local
-        spacing, ``max_width / spacing``). Default: no cap, so the last family fills the paper
-        at ``t = 1``; with a cap the darkest tones stay hatched and coverage saturates. At
-        most ``LIMITS["line_width"]`` = 64.
+        A further cap on the stroke width in output pixels (``"uv"``: as a fraction of the
+        local spacing, ``max_width / spacing``); where it binds, coverage saturates. At most
+        ``LIMITS["line_width"]`` = 64.
     uv_scale : float > 0, optional
         Strokes per unit of u or v (``"uv"`` only). Default: chosen so that the median
         on-screen spacing is ``spacing``.
     edges : bool, default: True
         Draw the profile edges (:func:`~sciviz_gbuf.filters.profile_edges`) in black on top,
-        whatever ``ink`` is.
+        whatever ``ink`` is, with a one-pixel halo of paper (:func:`profile_halo`) that keeps
+        the strokes off them.
     profile_width : float in [1, 64], default: 1
         Their width in output pixels; at most ``LIMITS["line_width"]`` = 64.
     ink, paper : 3 floats in [0, 1]
@@ -237,6 +312,7 @@ def hatch(
     # buffer pixels: the strokes are drawn supersampled
     sp = _validate.size(spacing, "spacing", "spacing") * k
     theta = _angles(angles)
+    m_ink = _validate.number_in(max_ink, "max_ink", 0.01, 0.99)
     cap_w = None if max_width is None else _validate.size(max_width, "max_width", "line_width") * k
     scale = None if uv_scale is None else _validate.positive(uv_scale, "uv_scale")
     if uv_scale is not None and space != "uv":
@@ -255,9 +331,9 @@ def hatch(
     # are evaluated on those alone, as flat arrays, and the families on shrinking subsets.
     at = np.flatnonzero(tone.reshape(-1) > 0)
     t_at = tone.reshape(-1)[at]
-    # Family f inks where tone > f / N, so pixels sorted by the number of families inking them
+    # Family f inks where tone > tau_f, so pixels sorted by the number of families inking them
     # make each family's pixels a prefix: slices instead of gathers in the loop below.
-    lows = np.arange(theta.size, dtype=np.float32) / np.float32(theta.size)
+    lows = family_thresholds(theta.size, m_ink)[0][:-1]
     n_inking = np.ones(t_at.size, dtype=np.uint8)  # all of them have tone > 0
     for lo in lows[1:]:
         n_inking += t_at > lo
@@ -288,7 +364,7 @@ def hatch(
         m = int(prefix[f + 1])  # pixels where family f inks
         if m == 0:
             break
-        cover = _family_coverage(t_at[:m], f, theta.size)
+        cover = _family_coverage(t_at[:m], f, theta.size, m_ink)
         if space == "screen":
             # float64, as the stroke coordinate is far from 0 across a large image
             along = (-x * np.sin(a))[cols[:m]]
@@ -301,6 +377,9 @@ def hatch(
         width = cover * period  # coverage c_f of a family `period` px apart
         if cap_w is not None:
             width = np.minimum(width, np.float32(cap_w) * (period / np.float32(sp)))
+        if space == "uv":
+            # crowded strokes (a silhouette, a pole of u, v) thin out instead of merging
+            width = width * crowding(period, k)
         # families at different angles overlap independently: the union keeps 1 - prod(1 - c)
         paper_left[:m] *= np.float32(1.0) - stroke_ink(distance, width)
     strokes = np.zeros(h * w, dtype=np.float32)
@@ -310,8 +389,14 @@ def hatch(
     np.clip(amount, 0.0, 1.0, out=amount)
     keep = None
     if edges:
-        # profiles are black whatever the ink colour (2003 edge enhancement: A channel)
-        keep = np.float32(1.0) - profile_edges(gb, width=pw)
+        # profiles are black whatever the ink colour (2003 edge enhancement: A channel), set
+        # off from the strokes by paper so that they stay visible over dark tones
+        prof = profile_edges(gb, width=pw)
+        halo = profile_halo(prof)
+        # inside the object only: at the antialiased outline the strokes keep it dark
+        halo[gb.downsample(mask.astype(np.float32)) < np.float32(1.0)] = np.float32(0.0)
+        amount *= np.float32(1.0) - halo
+        keep = np.float32(1.0) - prof
     rgb = np.empty((*amount.shape, 3), dtype=np.float32)
     plane = np.empty_like(amount)
     for c in range(3):  # contiguous planes: an innermost axis of 3 makes numpy slow

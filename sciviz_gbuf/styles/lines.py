@@ -22,6 +22,7 @@ from .. import _validate
 from ..core.gbuffer import GBuffer, check_gbuffer
 from ..errors import InputError
 from ..filters import hatching, lambert, profile_edges
+from ._ink import declump
 from .illustration import LIGHT
 from .registry import register
 
@@ -107,7 +108,8 @@ def line_drawing(
         ``shu`` / ``shv`` / ``shuv``: that hatching "enhanced with sh" — full lines where the
         tone ``1 - sh`` exceeds :data:`TONE_FULL`, thinner lines in half-tones, fading to no
         ink below :data:`TONE_NONE` (see :func:`modulation`) — composed with ``pr``.
-        Ink of overlapping lines is combined with ``max``.
+        Ink of overlapping lines is combined with ``max``. Where lines converge into a clump
+        thicker than a line, only its skeleton keeps ink: no combo but ``sh`` fills an area.
     spacing : float in (0, 1024], default: 6
         ``d_i`` of Eq. 18-20: on-screen hatch spacing in output pixels; at most
         ``LIMITS["spacing"]`` = 1024.
@@ -134,17 +136,20 @@ def line_drawing(
     shade = lambert(gb.normal, light=light, mask=gb.mask)  # validates light; NaN off the mask
     if combo == "sh":
         return np.clip(gb.downsample(np.where(gb.mask, shade, 1.0)), 0, 1).astype(np.float32)
-    prof = profile_edges(gb, width=pw)
+    # A line drawing never fills an area: where lines converge into a solid clump (the inner
+    # rim of a torus meeting its silhouette, profiles crowding at grazing angles) only the
+    # clump's centre lines keep their ink (see ``declump``).
+    thickest = max(pw, wd)
     if combo == "pr":
-        return (1.0 - prof).astype(np.float32)
+        return np.clip(1.0 - declump(profile_edges(gb, width=pw), pw), 0, 1).astype(np.float32)
     if combo in ("cu", "cv"):
         ink = gb.downsample(_hatch(gb, "uv".index(combo[1]), sp, wd))
-        return np.clip(1.0 - ink, 0.0, 1.0).astype(np.float32)
+        return np.clip(1.0 - declump(ink, wd), 0.0, 1.0).astype(np.float32)
     m = modulation(shade)
-    ink = prof
+    ink = profile_edges(gb, width=pw)
     for name in combo[2:]:
         ink = np.maximum(ink, gb.downsample(_enhanced(gb, "uv".index(name), sp, wd, m)))
-    return np.clip(1.0 - ink, 0.0, 1.0).astype(np.float32)
+    return np.clip(1.0 - declump(ink, thickest), 0.0, 1.0).astype(np.float32)
 
 
 def _tone_curve(x: np.ndarray, pivot: float, contrast: float) -> np.ndarray:
