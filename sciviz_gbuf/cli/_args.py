@@ -12,7 +12,9 @@ from pathlib import Path
 from ..errors import InputError
 
 __all__ = [
+    "UP_HELP",
     "add_progress",
+    "add_up",
     "number",
     "png_output",
     "positive_int",
@@ -81,6 +83,23 @@ def add_progress(p: argparse.ArgumentParser) -> None:
         default=None,
         help="show a progress bar (default: only when stderr is a terminal)",
     )
+
+
+#: The documented default of ``--up`` (the convention of the file's format, ``FORMATS``).
+UP_HELP = (
+    "world axis upright in the picture (default by the file's convention: y for OFF, OBJ, "
+    "PLY, glTF; z for STL, VTK, VTP, Bezier patches, DICOM)"
+)
+
+
+def add_up(p: argparse.ArgumentParser) -> None:
+    """``--up x|y|z`` (and the short ``-x``, ``-y``, ``-z``): the upright world axis; default
+    None, the file format's convention."""
+    p.add_argument("--up", choices=["x", "y", "z"], default=None, help=UP_HELP)
+    for axis in "xyz":
+        p.add_argument(
+            f"-{axis}", dest="up", action="store_const", const=axis, help=f"same as --up {axis}"
+        )
 
 
 def require_coverage(covered: bool, files: list[str], view: object) -> None:

@@ -14,7 +14,7 @@ from ..core.gbuffer import GBuffer
 from ..errors import InputError
 from ..readers import read_mesh
 from ..styles import illustrate, styles_for
-from ._args import number, positive_int, require_coverage, size
+from ._args import add_up, number, positive_int, require_coverage, size
 
 __all__ = ["add_capture", "add_edges", "add_info"]
 
@@ -32,6 +32,7 @@ def _cmd_capture(args: argparse.Namespace) -> int:
         scalars=[s for s in args.scalars.split(",") if s] if args.scalars else (),
         supersample=args.supersample,
         progress_bar=args.progress,
+        up=args.up,
     )
     require_coverage(bool(g.mask.any()), args.mesh, args.view)
     out = g.save(args.output)
@@ -55,6 +56,7 @@ def _cmd_edges(args: argparse.Namespace) -> int:
             camera=args.view,
             parallel_projection=True if args.parallel else None,
             supersample=args.supersample,
+            up=args.up,
         )
         require_coverage(bool(g.mask.any()), args.mesh, args.view)
         bar.step("edges")
@@ -93,6 +95,7 @@ def add_capture(sub) -> None:
     p.add_argument("--size", type=size, default=(1024, 768), help="image size WxH")
     p.add_argument("--view", default="iso", help="iso, xy, xz, yz, yx, zx or zy")
     p.add_argument("--parallel", action="store_true", help="orthographic projection")
+    add_up(p)
     p.add_argument("--scalars", default="", help="comma-separated point/cell arrays to capture")
     p.add_argument("--supersample", type=int, default=1, help="render at k times the size")
     p.add_argument("--progress", action="store_true", help="show a progress bar")
@@ -113,6 +116,7 @@ def add_edges(sub) -> None:
     p.add_argument("--size", type=size, default=(1024, 768), help="image size WxH")
     p.add_argument("--view", default="iso", choices=sorted(VIEWS), help="view direction")
     p.add_argument("--parallel", action="store_true", help="orthographic projection")
+    add_up(p)
     p.add_argument(
         "--supersample",
         type=positive_int,

@@ -76,6 +76,7 @@ def _cmd_ct(args: argparse.Namespace) -> int:
         smooth=args.smooth,
         largest=args.largest,
         progress_bar=show,
+        up=args.up,
     )
     if args.save_gbuffer:
         gb.save(args.save_gbuffer)
@@ -120,6 +121,13 @@ def add_ct(sub) -> None:
         "--view",
         default="anterior",
         help=f"anatomical view: {', '.join(VIEWS)}, or two joined by '-' (anterior-left)",
+    )
+    p.add_argument(
+        "--up",
+        choices=["x", "y", "z"],
+        default=None,
+        help="world axis upright in the picture (default: the head, +z, as DICOM's patient "
+        "axes have it; the face, -y, for superior/inferior views)",
     )
     p.add_argument("--size", type=size, default=(1024, 1024), help="size of each picture WxH")
     p.add_argument("--supersample", type=positive_int, default=2, help="render at k times the size")

@@ -8,10 +8,17 @@ from pathlib import Path
 
 from ..compose import write_png
 from ..core.camera import VIEWS
-from ..core.capture import capture
 from ..readers import read_mesh
 from ..recipes.npr import STYLES, npr_image
-from ._args import add_progress, png_output, positive_int, require_coverage, show_progress, size
+from ._args import (
+    add_progress,
+    add_up,
+    png_output,
+    positive_int,
+    require_coverage,
+    show_progress,
+    size,
+)
 
 __all__ = ["add_mesh"]
 
@@ -33,20 +40,15 @@ def _cmd_mesh(args: argparse.Namespace) -> int:
     options = {"light": args.light} if args.light is not None else {}
     if args.style == "toon":
         options["levels"] = args.levels
-    if args.parallel:
-        source = capture(
-            meshes, window_size=args.size, camera=args.view, parallel_projection=True,
-            supersample=args.supersample, progress_bar=show_progress(args),
-        )  # fmt: skip
-    else:
-        source = meshes
     image = npr_image(
-        source,
+        meshes,
         style=args.style,
         view=args.view,
         window_size=args.size,
         supersample=args.supersample,
         progress_bar=show_progress(args),
+        parallel_projection=True if args.parallel else None,
+        up=args.up,
         **options,
     )
     require_coverage(bool((image != 255).any()), args.mesh, args.view)  # not blank paper
@@ -75,6 +77,7 @@ def add_mesh(sub) -> None:
     )
     p.add_argument("--view", default="iso", choices=sorted(VIEWS), help="view direction")
     p.add_argument("--parallel", action="store_true", help="orthographic projection")
+    add_up(p)
     p.add_argument("--size", type=size, default=(1024, 768), help="image size WxH")
     p.add_argument("--supersample", type=positive_int, default=2, help="render at k times the size")
     p.add_argument("--light", type=_light, default=None, help="eye-space light direction X,Y,Z")

@@ -9,7 +9,7 @@ from pathlib import Path
 from ..compose import write_png
 from ..readers.patches import read_patches
 from ..recipes.surface import CURVATURES, MODES, surface_analysis, surface_gbuffer
-from ._args import add_progress, number, png_output, positive_int, show_progress, size
+from ._args import add_progress, add_up, number, png_output, positive_int, show_progress, size
 
 __all__ = ["add_patches"]
 
@@ -40,6 +40,7 @@ def _cmd_patches(args: argparse.Namespace) -> int:
         window_size=args.size,
         supersample=args.supersample,
         progress_bar=show_progress(args),
+        up=args.up,
     )
     image = surface_analysis(
         gb,
@@ -71,6 +72,7 @@ def add_patches(sub) -> None:
     p.add_argument("-o", "--output", required=True, help="output image (.png)")
     p.add_argument("--mode", default="reflection", choices=MODES, help="what to draw")
     p.add_argument("--view", default="iso", help="iso, xy, xz, yz, yx, zx or zy")
+    add_up(p)
     p.add_argument("--size", type=size, default=(1024, 768), help="image size WxH")
     p.add_argument("--supersample", type=positive_int, default=2, help="render at k times the size")
     p.add_argument(

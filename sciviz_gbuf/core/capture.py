@@ -21,8 +21,9 @@ from ..errors import InputError
 from . import _capture_kernels as _kernels
 from ._render import IdRenderer
 from .camera import VIEWS, CameraInfo
+from .framing import check_up, default_up, named_view_camera
 from .gbuffer import GBuffer
-from .scene import Surface, collect_surfaces, is_plotter
+from .scene import Surface, collect_surfaces, is_plotter, scene_items
 
 __all__ = [
     "BYTES_PER_PIXEL",
@@ -112,10 +113,13 @@ def check_scalars(scalars: object) -> tuple[str, ...]:
     return names
 
 
-def resolve_camera(camera: object, scene: object, parallel: bool | None) -> tuple[vtkCamera, bool]:
-    """A new camera for the capture, and whether it still has to be fitted to the data."""
+def resolve_camera(
+    camera: object, scene: object, parallel: bool | None
+) -> tuple[vtkCamera, str | None]:
+    """A new camera for the capture, and the named view it still has to be framed as (None: a
+    camera used as given)."""
     cam = vtkCamera()
-    reset = False
+    reset = None
     if camera is None and is_plotter(scene):
         cam.DeepCopy(scene.renderer.GetActiveCamera())
         # A Plotter that was never shown has not placed its camera yet: place it as it will.
@@ -129,7 +133,7 @@ def resolve_camera(camera: object, scene: object, parallel: bool | None) -> tupl
         cam.SetFocalPoint(0.0, 0.0, 0.0)
         cam.SetPosition(*direction)
         cam.SetViewUp(*up)
-        reset = True
+        reset = camera
     elif isinstance(camera, CameraInfo):
         cam = camera.to_vtk()
     elif isinstance(camera, vtkCamera):
@@ -250,6 +254,7 @@ def capture(
     supersample: int = 1,
     feature_angle: float = 30.0,
     progress_bar: bool = False,
+    up: str | None = None,
 ) -> GBuffer:
     """Render a scene offscreen with VTK and return its float32 G-buffers.
 
@@ -267,9 +272,11 @@ def capture(
         2**28, and their memory (:data:`BYTES_PER_PIXEL` bytes each) at most what is
         available when the capture starts.
     camera : str, vtkCamera, CameraInfo or (position, focal_point, view_up), optional
-        A view name (``'iso'``, ``'xy'``, ``'xz'``, ``'yz'``, ``'yx'``, ``'zx'``, ``'zy'``) is
-        fitted to the data like PyVista's ``view_*``; a camera or camera position is used as given
-        (a copy). The clipping range is always set tightly around the data.
+        A view name (``'iso'``, ``'xy'``, ``'xz'``, ``'yz'``, ``'yx'``, ``'zx'``, ``'zy'``) looks
+        along PyVista's ``view_*`` direction and is framed by the package's one rule (the
+        points' projected box centred, filling 85 % of the limiting image dimension, see
+        :func:`~sciviz_gbuf.core.framing.framed_camera`); a camera or camera position is used
+        as given (a copy). The clipping range is always set tightly around the data.
     parallel_projection : bool, optional
         Force orthographic (True) or perspective (False); default: as the camera is.
     scalars : str or sequence of str
@@ -282,6 +289,10 @@ def capture(
         this many degrees (PyVista's ``split_sharp_edges``); 180 smooths everything.
     progress_bar : bool, default: False
         Show a progress bar (PyVista convention).
+    up : {"x", "y", "z"}, optional
+        World axis upright in the ``'iso'`` view; default by the convention of the file the
+        data was read from (``read_mesh``: y for OFF/OBJ/PLY/glTF, else z; see
+        :func:`~sciviz_gbuf.core.framing.default_up`).
 
     Returns
     -------
@@ -301,6 +312,8 @@ def capture(
     if not (0.0 <= _validate.finite(feature_angle, "feature_angle") <= 180.0):
         raise InputError(f"feature_angle: expected degrees in [0, 180], got {feature_angle!r}")
     names = check_scalars(scalars)
+    if up is not None:
+        up = check_up(up)
 
     with progress(progress_bar, 4, "capture") as bar:
         surfaces = collect_surfaces(scene, feature_angle=float(feature_angle))
@@ -325,12 +338,20 @@ def capture(
         renderer = IdRenderer(points, triangles)
         try:
             renderer.window.SetSize(*size)
-            if reset:
-                lo, hi = points.min(axis=0), points.max(axis=0)
-                cam.SetFocalPoint(*((lo + hi) / 2))
-                cam.SetPosition(*((lo + hi) / 2 + np.asarray(cam.GetPosition())))
-                renderer.renderer.SetActiveCamera(cam)
-                renderer.renderer.ResetCamera(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2])
+            if reset is not None:
+                if up is None:
+                    up = default_up([d for _, d, _ in scene_items(scene)])
+                pos, foc, vup = named_view_camera(
+                    points, reset, aspect=size[0] / size[1], up=up,
+                    view_angle=cam.GetViewAngle(), parallel=bool(cam.GetParallelProjection()),
+                )  # fmt: skip
+                cam.SetPosition(*pos)
+                cam.SetFocalPoint(*foc)
+                cam.SetViewUp(*vup)
+                if cam.GetParallelProjection():
+                    cam.SetParallelScale(
+                        cam.GetDistance() * np.tan(np.radians(cam.GetViewAngle()) / 2)
+                    )
             _fit_clipping(cam, points)
             tid = renderer.render(cam, size)
         finally:

@@ -7,7 +7,7 @@ any path by it.
 from ._dem_model import metres_per_degree
 from .dem import DEM, read_dem
 from .dicom import dicom_report, read_dicom_series
-from .formats import FORMATS, KINDS, Format, kind_of, suffixes
+from .formats import FORMATS, KINDS, UP_AXES, Format, kind_of, suffixes, up_axis
 from .mesh import read_mesh
 from .patches import PatchSet, read_patches
 from .read import read_scene
@@ -16,6 +16,7 @@ __all__ = [
     "DEM",
     "FORMATS",
     "KINDS",
+    "UP_AXES",
     "Format",
     "PatchSet",
     "dicom_report",
@@ -27,4 +28,5 @@ __all__ = [
     "read_patches",
     "read_scene",
     "suffixes",
+    "up_axis",
 ]

@@ -2,9 +2,14 @@
 
 Every place that decides what a file is asks this table (:func:`kind_of`, :func:`suffixes`):
 ``read_dem`` for its in-memory parsers and for which files GDAL reads in windows,
-``read_scene`` and the explorer for what a path holds. Adding a format is one line here
-(plus its parser). A suffix that is not listed is a mesh for PyVista/VTK's own readers, and a
-folder is a DICOM series.
+``read_scene`` and the explorer for what a path holds, the cameras for which world axis is up
+(:func:`up_axis`). Adding a format is one line here (plus its parser). A suffix that is not
+listed is a mesh for PyVista/VTK's own readers, and a folder is a DICOM series.
+
+The up axis follows each format's convention: the graphics world's interchange formats
+(OFF, OBJ, PLY, glTF) are y-up, as are most scanned meshes in them; CAD and science formats
+(STL, VTK's own, DEMs) and DICOM (patient LPS, head at +z) are z-up, and so are Newell's
+Bezier patch files (the teapot's axis is z).
 """
 
 from __future__ import annotations
@@ -24,10 +29,12 @@ from ._dem_files import (
     read_usgs_dem,
 )
 
-__all__ = ["FORMATS", "KINDS", "Format", "kind_of", "suffixes"]
+__all__ = ["FORMATS", "KINDS", "UP_AXES", "Format", "kind_of", "suffixes", "up_axis"]
 
 #: What a path can hold: a DEM grid, a surface/volume mesh, Bezier patches, a DICOM series.
 KINDS = ("dem", "mesh", "patches", "dicom")
+#: The world axes a file's convention can make upright.
+UP_AXES = ("x", "y", "z")
 
 
 @dataclass(frozen=True)
@@ -45,12 +52,16 @@ class Format:
     windowed : bool
         True if GDAL (rasterio) reads it in windows, so ``read_dem(chunks=)`` is lazy and it
         can be a tile of a mosaic; False if it is parsed whole in memory.
+    up : {"x", "y", "z"}
+        The world axis the format's convention makes upright: the default view-up of the
+        cameras built from such a file (``up=`` / ``--up`` override it).
     """
 
     kind: str
     description: str
     read_raw: Callable[[Path], RawDEM] | None = None
     windowed: bool = False
+    up: str = "z"
 
 
 #: suffix (lower case, with the dot) -> :class:`Format`.
@@ -63,6 +74,16 @@ FORMATS: dict[str, Format] = {
     ".tif": Format("dem", "GeoTIFF", read_geotiff, windowed=True),
     ".tiff": Format("dem", "GeoTIFF", read_geotiff, windowed=True),
     ".bpt": Format("patches", "Bezier patch set"),
+    # Meshes: read by PyVista/VTK (any other suffix is tried as a mesh too, z-up).
+    ".stl": Format("mesh", "STL triangles"),
+    ".vtk": Format("mesh", "legacy VTK dataset"),
+    ".vtp": Format("mesh", "VTK XML polygonal data"),
+    ".vtu": Format("mesh", "VTK XML unstructured grid"),
+    ".ply": Format("mesh", "PLY polygons", up="y"),
+    ".obj": Format("mesh", "Wavefront OBJ", up="y"),
+    ".off": Format("mesh", "Object File Format", up="y"),
+    ".gltf": Format("mesh", "glTF scene", up="y"),
+    ".glb": Format("mesh", "binary glTF scene", up="y"),
 }
 
 
@@ -79,3 +100,13 @@ def kind_of(path: str | os.PathLike) -> str:
         return "dicom"
     fmt = FORMATS.get(p.suffix.lower())
     return fmt.kind if fmt is not None else "mesh"
+
+
+def up_axis(path: str | os.PathLike | None) -> str:
+    """The world axis that is upright by the convention of ``path``'s format (``"x"``, ``"y"``
+    or ``"z"``): ``"y"`` for OFF/OBJ/PLY/glTF, ``"z"`` for everything else (STL, VTK, DEMs,
+    Bezier patches, a DICOM folder, unlisted suffixes, and no path at all)."""
+    if path is None:
+        return "z"
+    fmt = FORMATS.get(Path(path).suffix.lower())
+    return fmt.up if fmt is not None else "z"

@@ -126,6 +126,7 @@ def birdseye_gbuffer(
         elevation=elevation_angle,
         view_angle=view_angle,
         aspect=w / max(h, 1),
+        points=pts,
     )
     return capture(
         surface,

@@ -24,7 +24,7 @@ from matplotlib.colors import LinearSegmentedColormap
 
 from .. import _validate
 from ..core.capture import capture, check_capture_size
-from ..core.framing import framed_camera
+from ..core.framing import FILL, check_up, framed_camera
 from ..core.gbuffer import GBuffer
 from ..core.isosurface import isosurface
 from ..errors import InputError
@@ -81,9 +81,11 @@ def view_camera(
     *,
     view_angle: float = 20.0,
     aspect: float = 1.0,
-    margin: float = 0.04,
+    margin: float = 1.0 - FILL,
+    up: str | None = None,
 ):
-    """A camera framing ``points`` from an anatomical view.
+    """A camera framing ``points`` from an anatomical view, by the one framing rule (their
+    projected box centred, filling :data:`~sciviz_gbuf.core.framing.FILL` of the image).
 
     Parameters
     ----------
@@ -95,7 +97,11 @@ def view_camera(
         along z, when the face, -y, is).
     view_angle, aspect, margin
         As in :func:`~sciviz_gbuf.core.framing.framed_camera`.
+    up : {"x", "y", "z"}, optional
+        World axis upright in the picture, for views not along it; default the anatomical
+        rule (DICOM is z-up: the head, +z, is up; looking along z, the face, -y).
     """
+    up_axis = None if up is None else check_up(up)
     if isinstance(view, str):
         names = [v.strip().lower() for v in view.split("-")]
         bad = [n for n in names if n not in VIEWS]
@@ -117,6 +123,10 @@ def view_camera(
             raise InputError(f"view: expected a finite non-zero 3-vector, got {view!r}")
         up = np.array([0.0, 0.0, 1.0])
     d = direction / np.linalg.norm(direction)
+    if up_axis is not None:
+        wanted = np.eye(3)[_AXES[up_axis]]
+        if np.linalg.norm(wanted - (wanted @ d) * d) > 1e-6:
+            up = wanted
     up = up - (up @ d) * d
     if np.linalg.norm(up) < 1e-6:
         up = np.array([0.0, -1.0, 0.0]) - (-d[1]) * d
@@ -175,6 +185,7 @@ def ct_gbuffer(
     supersample: int = 2,
     view_angle: float = 20.0,
     progress_bar: bool = False,
+    up: str | None = None,
     **surface_options,
 ) -> GBuffer:
     """Render the CT surface once from ``view`` and keep its G-buffers (1990 §4.4: wx, wy, wz,
@@ -194,16 +205,19 @@ def ct_gbuffer(
         Render at this many times the size: antialiased lines and silhouettes.
     view_angle : float, default: 20
     progress_bar : bool, default: False
+    up : {"x", "y", "z"}, optional
+        World axis upright in the picture (see :func:`view_camera`); default the anatomical
+        rule (head up).
     """
     # the capture's size is checked before the volume is read and its surface extracted
     w, h, _ = check_capture_size(window_size, supersample)
     surface = ct_surface(source, iso=iso, progress_bar=progress_bar, **surface_options)
     if camera is None:
-        position, focal, up = view_camera(
-            surface.points, view, view_angle=view_angle, aspect=w / max(h, 1)
+        position, focal, view_up = view_camera(
+            surface.points, view, view_angle=view_angle, aspect=w / max(h, 1), up=up
         )
         camera = pv.Camera()
-        camera.position, camera.focal_point, camera.up = position, focal, up
+        camera.position, camera.focal_point, camera.up = position, focal, view_up
         camera.view_angle = view_angle
     return capture(
         surface,

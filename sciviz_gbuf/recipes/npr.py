@@ -13,9 +13,7 @@ import numpy as np
 import pyvista as pv
 
 from ..compose import to_uint8
-from ..core.camera import VIEWS
 from ..core.capture import capture
-from ..core.framing import named_view_camera
 from ..core.gbuffer import GBuffer
 from ..datasets import load_nut
 from ..styles import STYLES as STYLE_REGISTRY
@@ -37,6 +35,8 @@ def npr_image(
     supersample: int = 2,
     combo: str = "shuv",
     progress_bar: bool = False,
+    parallel_projection: bool | None = None,
+    up: str | None = None,
     **style_options,
 ) -> np.ndarray:
     """One NPR picture of a scene or G-buffer.
@@ -45,14 +45,19 @@ def npr_image(
     ----------
     source : GBuffer, PyVista dataset(s) or Plotter
         A G-buffer is used as is; anything else is captured first (``view``, ``window_size``,
-        ``supersample`` as in :func:`~sciviz_gbuf.capture`; a named view of datasets is framed
-        tightly on their points).
+        ``supersample`` as in :func:`~sciviz_gbuf.capture`; a named view is framed by the
+        package's one rule: the points' projected box centred, filling 85 % of the image).
     style : {"gooch", "toon", "hatch", "drawing"}, default: "gooch"
         See :data:`STYLES`; ``"lines"`` is the old name of ``"drawing"``.
     combo : str, default: "shuv"
         ``drawing``: which 1990 Fig. 9 combination (:func:`~sciviz_gbuf.styles.line_drawing`);
         a surface without texture coordinates is hatched along sections of one world axis
         instead (``shuv`` becomes ``shu``, see :func:`~sciviz_gbuf.styles.drawing`).
+    parallel_projection : bool, optional
+        Orthographic (True) or perspective (False) capture; default as the camera is.
+    up : {"x", "y", "z"}, optional
+        World axis upright in the ``"iso"`` view; default by the file convention of the data
+        (:func:`~sciviz_gbuf.core.framing.default_up`: y for OFF/OBJ/PLY/glTF, else z).
     **style_options
         Passed to the style function (``light``, ``levels``, ``spacing``...).
 
@@ -65,13 +70,11 @@ def npr_image(
         gb = source
     else:
         w, h = (int(v) for v in window_size)
-        if isinstance(view, str) and view in VIEWS and isinstance(source, (pv.DataSet, list)):
-            items = source if isinstance(source, list) else [source]
-            points = np.concatenate([np.asarray(d.points) for d in items if d.n_points])
-            view = named_view_camera(points, view, aspect=w / max(h, 1))
+        # A named view is framed by the capture itself (the one framing rule, on the points
+        # it renders, transforms included).
         gb = capture(
             source, window_size=(w, h), camera=view, supersample=supersample,
-            progress_bar=progress_bar,
+            progress_bar=progress_bar, parallel_projection=parallel_projection, up=up,
         )  # fmt: skip
     if style == "drawing":
         style_options["combo"] = combo

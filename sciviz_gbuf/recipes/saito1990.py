@@ -79,13 +79,27 @@ L_HALF = 2.0
 E_SCALE = 1.0
 
 
-def nut_camera(bounds: Sequence[float], *, aspect: float = 4 / 3):
+def nut_camera(bounds: Sequence[float], *, aspect: float = 4 / 3, points: np.ndarray | None = None):
     """A view of PyVista's nut like the paper's: axis (world y) upright, seen from 45 degrees
     above and turned 25 degrees, so the top face, its chamfer, the hole and two side faces show.
 
+    Framed by the one rule (:func:`~sciviz_gbuf.core.framing.framed_camera`) on ``points``
+    if given, else on the elliptic cylinder inscribed in ``bounds`` about y: the nut's
+    hexagonal prism, which the box's corners would overestimate from this oblique view.
+
     Returns ``(position, focal_point, view_up)`` for :func:`sciviz_gbuf.capture`.
     """
-    return oblique_camera(bounds, up_axis="y", elevation=45.0, azimuth=-25.0, aspect=aspect)
+    if points is None:
+        lo = np.asarray(bounds[0::2], dtype=np.float64)
+        hi = np.asarray(bounds[1::2], dtype=np.float64)
+        c, r = (lo + hi) / 2, (hi - lo) / 2
+        t = np.linspace(0.0, 2 * np.pi, 73)
+        ring = np.column_stack([c[0] + r[0] * np.cos(t), np.zeros_like(t), c[2] + r[2] * np.sin(t)])
+        lift = np.array([0.0, 1.0, 0.0])
+        points = np.concatenate([ring + lo[1] * lift, ring + hi[1] * lift])
+    return oblique_camera(
+        bounds, up_axis="y", elevation=45.0, azimuth=-25.0, aspect=aspect, points=points
+    )
 
 
 def sz_with_background(gb: GBuffer) -> np.ndarray:

@@ -19,7 +19,7 @@ import pyvista as pv
 from ..compose import colorize
 from ..core.camera import VIEWS
 from ..core.capture import capture, check_capture_size
-from ..core.framing import named_view_camera
+from ..core.framing import default_up, named_view_camera
 from ..core.gbuffer import GBuffer
 from ..errors import InputError
 from ..filters import contour_lines, lambert, profile_edges
@@ -125,6 +125,7 @@ def surface_gbuffer(
     supersample: int = 2,
     parallel_projection: bool | None = None,
     progress_bar: bool = False,
+    up: str | None = None,
 ) -> GBuffer:
     """Tessellate (patch sets) and render once; capture the curvature arrays and patch ids.
 
@@ -138,18 +139,25 @@ def surface_gbuffer(
         keeps its point ``"Normals"`` and gets mesh-based curvatures if it has none.
     view : camera, default: "iso"
         Anything :func:`~sciviz_gbuf.capture` accepts (``"iso"``, ``"xy"``, a camera...); the
-        named views are framed tightly on the surface.
+        named views are framed by the one rule (the surface's projected box centred, filling
+        85 % of the image).
     resolution : int or (int, int), default: 32
         Tessellation of each patch (per parameter direction), at most
         ``LIMITS["resolution"]`` = 4096 and ``LIMITS["mesh_points"]`` = 2**24 points in all.
     window_size, supersample, parallel_projection, progress_bar
         As in :func:`~sciviz_gbuf.capture`.
+    up : {"x", "y", "z"}, optional
+        World axis upright in the ``"iso"`` view; default ``"z"`` (Bezier patch files follow
+        Newell's z-up teapot; a mesh read from a file follows its format's convention).
     """
     # the capture's size is checked before the surface is tessellated
     w, h, _ = check_capture_size(window_size, supersample)
     mesh = _surface(source, resolution)
     if isinstance(view, str) and view in VIEWS:
-        view = named_view_camera(mesh.points, view, aspect=w / max(h, 1))
+        view = named_view_camera(
+            mesh.points, view, aspect=w / max(h, 1), parallel=bool(parallel_projection),
+            up=up if up is not None else default_up(source),
+        )  # fmt: skip
     wanted = [a for a in (*_CURVATURE_ARRAYS.values(), "patch_id") if a in mesh.array_names]
     return capture(
         mesh,

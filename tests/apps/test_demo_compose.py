@@ -17,6 +17,7 @@ from PIL import Image
 from sciviz_gbuf import GBuffer, InputError
 from sciviz_gbuf.apps.demo import run_demo, terrain_birdseye_camera
 from sciviz_gbuf.compose import colorize, ids_to_rgb, montage, normals_to_rgb, to_uint8, write_png
+from sciviz_gbuf.core.framing import framing
 from sciviz_gbuf.datasets import load_jacksboro_terrain, load_nut
 
 WHITE = np.ones(3, dtype=np.float32)
@@ -240,7 +241,10 @@ def test_jacksboro_vert_exag():
 def test_birdseye_camera_is_south_east_and_above():
     bounds = (0.0, 1000.0, 0.0, 2000.0, 0.0, 100.0)
     pos, foc, up = terrain_birdseye_camera(bounds)
-    assert foc == pytest.approx((500.0, 1000.0, 50.0))
+    # framed by the one rule: the box's projected corners centred, filling 85 %
+    corners = np.array(np.meshgrid(*np.reshape(bounds, (3, 2)))).reshape(3, -1).T
+    fill, dx, dy = framing(corners, pos, foc, up)
+    assert fill == pytest.approx(0.85, abs=2e-3) and abs(dx) < 2e-3 and abs(dy) < 2e-3
     d = np.subtract(pos, foc)
     assert d[0] > 0 and d[1] < 0 and d[2] > 0
     assert d[0] == pytest.approx(-d[1])
