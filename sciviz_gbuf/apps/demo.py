@@ -114,7 +114,7 @@ def _scenes(aspect: float) -> list[_Scene]:
             "terrain",
             "Jacksboro fault DEM, bird's-eye view from the south-east (vertical exaggeration 2)",
             terrain,
-            camera=terrain_birdseye_camera(terrain.bounds, aspect=aspect),
+            camera=terrain_birdseye_camera(terrain.bounds, aspect=aspect, points=terrain.points),
             scalars=("elevation",),
             sun=(315.0, 45.0),
             units="m",

@@ -36,9 +36,11 @@ def _unit(vector: Sequence[float], name: str) -> np.ndarray:
     try:
         v = np.asarray(vector, dtype=np.float64).reshape(3)
     except (TypeError, ValueError):
-        raise InputError(f"{name}: expected a 3-vector, got {vector!r}") from None
+        raise InputError(f"{name}: expected a 3-vector, got {_validate.brief(vector)}") from None
     if not (np.isfinite(v).all() and np.linalg.norm(v) > 0):
-        raise InputError(f"{name}: expected a finite non-zero 3-vector, got {vector!r}")
+        raise InputError(
+            f"{name}: expected a finite non-zero 3-vector, got {_validate.brief(vector)}"
+        )
     return v / np.linalg.norm(v)
 
 
