@@ -5,6 +5,9 @@ same run:
 
 - ours: ``sciviz-gbuf topo DEM -o map.png --contours 20,100`` - relief, colour bands and
   major/minor contour lines composited into one RGBA PNG (and once more with ``--geotiff``);
+- ours at ``--scale S`` (default 4): the map at S output pixels per DEM cell (heights resampled
+  by clamped cubic convolution first), for DEMs whose map side stays within ``--max-side``;
+  MPix/s counts output pixels;
 - GDAL: ``gdaldem hillshade`` + ``gdaldem color-relief`` + ``gdal_contour -i 20`` (three
   separate outputs, not yet one picture: the comparison flatters GDAL).
 
@@ -13,7 +16,7 @@ and writing included); peak resident memory from ``getrusage``. Every command ru
 times and the best time is reported.
 
 Usage: ``python benchmarks/bench_terrain.py [--sizes 2048,4096,8192] [--hurst 0.8,0.6]
-[--repeat 1]``
+[--repeat 1] [--scales 4] [--max-side 8192]``
 """
 
 from __future__ import annotations
@@ -111,6 +114,10 @@ def main() -> None:
         default="0.8,0.6",
         help="Hurst exponents of the synthetic terrains (0.8 smooth hills, 0.6 rugged)",
     )
+    parser.add_argument("--scales", default="4", help="map scales to time (pixels per cell)")
+    parser.add_argument(
+        "--max-side", type=int, default=8192, help="largest map side of a --scales row (memory)"
+    )
     args = parser.parse_args()
     tools = ("gdaldem", "gdal_contour")
     missing = [t for t in tools if shutil.which(t) is None]
@@ -157,23 +164,31 @@ def main() -> None:
                 ),
             ]
             ours_cmds = [
-                ("sciviz-gbuf topo --contours 20,100 (PNG)", []),
-                ("sciviz-gbuf topo ... --geotiff (PNG + TIF)", ["--geotiff", str(t / "m.tif")]),
+                ("sciviz-gbuf topo --contours 20,100 (PNG)", [], 1.0),
+                (
+                    "sciviz-gbuf topo ... --geotiff (PNG + TIF)",
+                    ["--geotiff", str(t / "m.tif")],
+                    1.0,
+                ),
             ]
+            for k in (float(v) for v in args.scales.split(",") if v):
+                if n * k <= args.max_side:
+                    ours_cmds.append((f"sciviz-gbuf topo ... --scale {k:g} (PNG)",
+                                      ["--scale", f"{k:g}"], k))  # fmt: skip
             rows = []
             gdal_total = 0.0
             for name, cmd in gdal:
                 s, rss = run(cmd, args.repeat)
                 gdal_total += s
-                rows.append((name, s, rss))
-            rows.append(("GDAL total (3 commands)", gdal_total, float("nan")))
-            for name, extra in ours_cmds:
+                rows.append((name, s, rss, 1.0))
+            rows.append(("GDAL total (3 commands)", gdal_total, float("nan"), 1.0))
+            for name, extra, k in ours_cmds:
                 cmd = [*ours, "topo", str(dem), "-o", str(t / "map.png"), "--contours", "20,100"]
                 s, rss = run([*cmd, *extra, "--no-progress"], args.repeat)
-                rows.append((name, s, rss))
-            for name, s, rss in rows:
-                ratio = f"{gdal_total / s:7.1f}x" if name.startswith("sciviz") else ""
-                mp = n * n / s / 1e6
+                rows.append((name, s, rss, k))
+            for name, s, rss, k in rows:
+                ratio = f"{gdal_total / s:7.1f}x" if name.startswith("sciviz") and k == 1 else ""
+                mp = n * n * k * k / s / 1e6
                 mem = f"{rss:7.0f}" if rss == rss else " " * 7
                 print(f"{n:>6} {name:<44} {s:7.2f} {mp:7.1f} {mem} {ratio:>8}")
             print()

@@ -59,6 +59,7 @@ LIMITS: dict[str, float] = {
     "resolution": 4096,  # tessellation intervals per patch side (patches, parametric surfaces)
     "mesh_points": 2**24,  # points of one tessellation (all patches together)
     "image_side": 16384,  # px: one side of a capture or an output image
+    "dpi": 9600,  # dots per inch of a map scale or a PNG's pHYs (high-end scanners, printers)
     "supersample": 8,  # capture supersampling factor
     "image_pixels": 2**28,  # width x height x supersample^2 of one capture
 }

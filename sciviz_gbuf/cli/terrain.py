@@ -22,7 +22,7 @@ from ..writers.cog import (
     local_client,
     write_cog,
 )
-from ._args import add_progress, number, png_output, positive_int, show_progress, size
+from ._args import add_progress, number, png_output, positive_int, show_progress
 
 __all__ = ["add_birdseye", "add_topo"]
 
@@ -62,6 +62,106 @@ def _bands(text: str):
             f"expected auto, none, continuous, an interval > 0 or levels L1,L2,..., got {text!r}"
         )
     return vals[0] if len(vals) == 1 else vals
+
+
+def _map_size(text: str) -> int | tuple[int, int]:
+    """``--size``: ``N`` (the long side) or ``WxH`` in pixels, one of them 0 to keep the
+    aspect (``2048x0``)."""
+    try:
+        vals = [int(v) for v in text.lower().split("x")]
+    except ValueError:
+        vals = []
+    if len(vals) not in (1, 2) or min(vals) < 0 or max(vals) < 1:
+        raise argparse.ArgumentTypeError(
+            f"expected a long side N or WIDTHxHEIGHT in pixels such as 2048 or 2048x1536 "
+            f"(0 keeps the aspect: 2048x0), got {text!r}"
+        )
+    return vals[0] if len(vals) == 1 else (vals[0], vals[1])
+
+
+def _scale_arg(text: str) -> float | str:
+    """``--scale``: pixels per DEM cell (a number > 0), or a map scale ``1:N`` (with --dpi)."""
+    t = text.strip()
+    if ":" in t:
+        head, _, tail = t.partition(":")
+        try:
+            ok = head.strip() == "1" and math.isfinite(float(tail)) and float(tail) >= 1
+        except ValueError:
+            ok = False
+        if ok:
+            return f"1:{float(tail):g}"
+    else:
+        try:
+            v = float(t)
+        except ValueError:
+            v = float("nan")
+        if math.isfinite(v) and v > 0:
+            return v
+    raise argparse.ArgumentTypeError(
+        f"expected pixels per DEM cell (a number > 0, e.g. 4) or a map scale 1:N (e.g. 1:25000, "
+        f"with --dpi), got {text!r}"
+    )
+
+
+def _add_size_options(p: argparse.ArgumentParser, *, plan_view: bool) -> None:
+    """``--size``, ``--scale`` and ``--dpi`` of the map commands."""
+    if plan_view:
+        p.add_argument(
+            "--size",
+            type=_map_size,
+            default=None,
+            metavar="N|WxH",
+            help="output size in pixels: the long side N (aspect kept, like gdal_translate "
+            "-outsize N 0) or WxH over the DEM's extent (0 keeps the aspect); default one "
+            "pixel per DEM cell. Larger maps resample the heights smoothly (cubic) first, "
+            "smaller ones average them",
+        )
+        p.add_argument(
+            "--scale",
+            type=_scale_arg,
+            default=None,
+            metavar="S|1:N",
+            help="instead of --size: S output pixels per DEM cell (e.g. 4), or with --dpi the map "
+            "scale 1:N (e.g. --scale 1:25000 --dpi 300: 25000 x 0.0254 / 300 = 2.12 m per pixel)",
+        )
+        p.add_argument(
+            "--dpi",
+            type=number(lambda v: v > 0, "dots per inch > 0"),
+            default=None,
+            help="print resolution: sizes a map scale (--scale 1:N) and is recorded in a PNG "
+            "output (pHYs)",
+        )
+        return
+    p.add_argument(
+        "--size",
+        type=_map_size,
+        default=None,
+        metavar="N|WxH",
+        help="image size WxH, or the long side N (4:3); default 1024x768",
+    )
+    p.add_argument(
+        "--scale",
+        type=_scale_arg,
+        default=None,
+        metavar="S",
+        help="instead of --size: about S pixels per DEM cell across the terrain (the long "
+        "side is S times the DEM's long side in cells, 4:3)",
+    )
+    p.add_argument(
+        "--dpi",
+        type=number(lambda v: v > 0, "dots per inch > 0"),
+        default=None,
+        help="print resolution recorded in the PNG (pHYs); the pixels do not depend on it",
+    )
+
+
+def _size_options(args: argparse.Namespace) -> dict:
+    """The map's ``size``/``scale``/``dpi``: ``dpi`` sizes the map only with a scale (else it
+    is only recorded in a PNG)."""
+    opts = {"size": args.size, "scale": args.scale}
+    if args.scale is not None and args.dpi is not None:
+        opts["dpi"] = args.dpi
+    return opts
 
 
 def _read_terrain(source: str | None):
@@ -104,6 +204,7 @@ def _topo_options(args: argparse.Namespace, show: bool) -> dict:
         "variant": args.variant,
         "shadows": args.shadows,
         "sky_view": args.sky_view,
+        **_size_options(args),
         "progress_bar": show,
     }
 
@@ -121,6 +222,12 @@ def _topo_paths(args: argparse.Namespace) -> tuple[Path, bool]:
     if not out.parent.is_dir():
         raise InputError(f"--output: no such directory {str(out.parent)!r}")
     tif = suffix != ".png"
+    if lazy and (args.size is not None or args.scale is not None):
+        raise InputError(
+            f"{'--size' if args.size is not None else '--scale'}: out of core (--chunks/--dask) "
+            "a map is drawn one pixel per DEM cell; resample the DEM first (gdalwarp -ts/-tr) "
+            "or map it in memory"
+        )
     if lazy and not tif:
         raise InputError(
             f"--output: out of core (--chunks/--dask) the map is written as a Cloud-Optimised "
@@ -162,11 +269,12 @@ def _cmd_topo(args: argparse.Namespace) -> int:
                 rgba, out, dem=dem, overview_png=args.overview, overview_size=args.overview_size
             )
         else:
-            write_png(out, rgba)
+            write_png(out, rgba, dpi=args.dpi)
         if args.geotiff is not None:
+            # an image of another size than the DEM covers its extent: the transform follows
             write_geotiff(args.geotiff, rgba, dem=dem)
             bar.step("geotiff")
-    h, w = dem.shape
+    h, w = rgba.shape[:2]
     extra = "".join(f" and {f}" for f in (args.geotiff, args.overview) if f)
     print(f"wrote {out}{extra} ({w}x{h}) in {time.perf_counter() - t0:.1f} s")
     return 0
@@ -246,7 +354,8 @@ def _cmd_birdseye(args: argparse.Namespace) -> int:
         dem,
         view_azimuth=args.view_azimuth,
         elevation_angle=args.elevation_angle,
-        window_size=args.size,
+        size=args.size,
+        scale=args.scale,
         vert_exag=args.vert_exag,
         supersample=args.supersample,
         progress_bar=show,
@@ -267,8 +376,8 @@ def _cmd_birdseye(args: argparse.Namespace) -> int:
             altitude=args.altitude,
         )
         image = panels[args.style]
-    write_png(out, image)
-    w, h = args.size
+    write_png(out, image, dpi=args.dpi)
+    h, w = image.shape[:2]
     print(f"wrote {out} ({w}x{h}, {args.style}) in {time.perf_counter() - t0:.1f} s")
     return 0
 
@@ -347,8 +456,10 @@ def add_topo(sub) -> None:
         "--geotiff",
         default=None,
         metavar="FILE.tif",
-        help="also write an RGBA GeoTIFF with the DEM's CRS and transform",
+        help="also write an RGBA GeoTIFF with the DEM's CRS and transform (its pixel size "
+        "that of the map: --size/--scale)",
     )
+    _add_size_options(p, plan_view=True)
     p.add_argument(
         "--width",
         type=number(lambda v: v > 0, "a line width in pixels > 0"),
@@ -453,7 +564,7 @@ def add_birdseye(sub) -> None:
         default=1.0,
         help="vertical exaggeration of the surface (default 1)",
     )
-    p.add_argument("--size", type=size, default=(1024, 768), help="image size WxH")
+    _add_size_options(p, plan_view=False)
     p.add_argument("--supersample", type=positive_int, default=2, help="render at k times the size")
     p.add_argument(
         "--style",

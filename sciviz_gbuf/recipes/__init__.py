@@ -27,7 +27,7 @@ from .contour_figures import CONTOUR_CAPTIONS, fig5_panels, fig6_panels, fig11_p
 from .medical import ct_enhance, ct_gbuffer, ct_layers, ct_panels, ct_surface, view_camera
 from .saito1990 import CAPTIONS, fig3_panels, fig7_panels, nut_camera
 from .surface import seam_patches, surface_analysis, surface_gbuffer, surface_layers
-from .terrain import nice_intervals, topographic_map
+from .terrain import map_grid, nice_intervals, topographic_map
 
 __all__ = [
     "CAPTIONS",
@@ -50,6 +50,7 @@ __all__ = [
     "fig11_panels",
     "framed_camera",
     "illustrate",
+    "map_grid",
     "named_view_camera",
     "nice_intervals",
     "nut_camera",

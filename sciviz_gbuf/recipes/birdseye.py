@@ -34,6 +34,7 @@ from ._map import (
     relief_light,
     rgba,
 )
+from ._resample import view_size
 
 __all__ = [
     "PAPER",
@@ -68,10 +69,12 @@ def birdseye_gbuffer(
     view_azimuth: float = 135.0,
     elevation_angle: float = 35.0,
     view_angle: float = 30.0,
-    window_size: Sequence[int] = (1024, 768),
+    window_size: Sequence[int] | None = None,
     vert_exag: float = 1.0,
     supersample: int = 2,
     step: int | None = None,
+    size: int | Sequence[int] | None = None,
+    scale: float | None = None,
     progress_bar: bool = False,
 ) -> GBuffer:
     """Render a DEM's surface from above at an angle and keep its G-buffers.
@@ -87,8 +90,9 @@ def birdseye_gbuffer(
         Angle of the line of sight above the horizon, in (0, 90) degrees.
     view_angle : float, default: 30
         Vertical view angle of the perspective camera.
-    window_size : (int, int), default: (1024, 768)
-        Each side at most ``LIMITS["image_side"]`` = 16384 (see :func:`~sciviz_gbuf.capture`).
+    window_size : (int, int), optional
+        Default (1024, 768). Each side at most ``LIMITS["image_side"]`` = 16384 (see
+        :func:`~sciviz_gbuf.capture`).
     vert_exag : float, default: 1
         Vertical exaggeration of the surface (matplotlib's ``vert_exag``).
     supersample : int, default: 2
@@ -97,6 +101,13 @@ def birdseye_gbuffer(
     step : int, optional
         Render every ``step``-th cell; default the smallest step giving at most about two
         million points.
+    size : int or (int, int), optional
+        Instead of ``window_size``: ``N`` the long side (the aspect of ``window_size``'s default,
+        4:3), ``(W, H)``, or ``(W, 0)``/``(0, H)`` keeping that aspect.
+    scale : float, optional
+        Instead of ``window_size``/``size``: about this many pixels per DEM cell across the
+        terrain, i.e. a long side of ``scale`` times the DEM's long side in cells (4:3). A
+        perspective view has no map scale: ``"1:N"`` and ``dpi`` are for plan-view maps.
     progress_bar : bool, default: False
 
     Returns
@@ -104,14 +115,16 @@ def birdseye_gbuffer(
     GBuffer
         With scalar ``"elevation"`` (the true heights, not exaggerated).
     """
-    # the capture's size is checked before the DEM is read
-    w, h, _ = check_capture_size(window_size, supersample)
+    # the capture's size is checked before the DEM is read (with scale=, once more after)
+    w, h, _ = check_capture_size(view_size(window_size, size, scale), supersample)
     vert_exag = _validate.positive(vert_exag, "vert_exag")
     if step is not None and not (
         isinstance(step, (int, np.integer)) and not isinstance(step, bool) and step >= 1
     ):
         raise InputError(f"step: expected an integer >= 1, got {_validate.brief(step)}")
     d = as_dem(dem)
+    if scale is not None:
+        w, h, _ = check_capture_size(view_size(None, None, scale, d.shape), supersample)
     if not d.mask.any():
         raise InputError(f"{d.source or 'DEM'}: no valid heights to render")
     if step is None:
@@ -140,6 +153,13 @@ def birdseye_gbuffer(
 
 def _gbuffer_of(dem_or_gbuffer, **capture_opts) -> GBuffer:
     if isinstance(dem_or_gbuffer, GBuffer):
+        for key in ("size", "scale"):
+            if capture_opts.get(key) is not None:
+                h, w = dem_or_gbuffer.mask.shape[:2]
+                raise InputError(
+                    f"{key}: the G-buffer is already rendered ({w}x{h} buffer pixels): render "
+                    "another with birdseye_gbuffer(size=/scale=)"
+                )
         if "elevation" not in dem_or_gbuffer.scalars:
             raise InputError(
                 "gbuffer: expected a G-buffer with the 'elevation' scalar (birdseye_gbuffer)"
@@ -269,9 +289,11 @@ def birdseye_map(
     *,
     view_azimuth: float = 135.0,
     elevation_angle: float = 35.0,
-    window_size: Sequence[int] = (1024, 768),
+    window_size: Sequence[int] | None = None,
     vert_exag: float = 1.0,
     supersample: int = 2,
+    size: int | Sequence[int] | None = None,
+    scale: float | None = None,
     interval: float | None = None,
     major_interval: float | None = None,
     width: float = 1.0,
@@ -297,6 +319,10 @@ def birdseye_map(
         is rendered and the view options are ignored.
     view_azimuth, elevation_angle, window_size, vert_exag, supersample
         The view, as in :func:`birdseye_gbuffer`.
+    size, scale
+        The output size instead of ``window_size``, as in :func:`birdseye_gbuffer`: ``N`` (the
+        long side), ``(W, H)``, or about ``scale`` pixels per DEM cell. Refused with a
+        G-buffer (already rendered).
     interval, major_interval, width, major_width, dense_spacing, contour_color
         Contour lines of the true height, as in
         :func:`~sciviz_gbuf.recipes.terrain.topographic_map`; widths in output pixels.
@@ -314,8 +340,8 @@ def birdseye_map(
     Returns
     -------
     (H, W, 4) uint8 RGBA
-        At ``window_size``; transparent where no valid terrain was rendered (the sky, nodata
-        holes), antialiased at the outline.
+        At ``window_size`` (or ``size``/``scale``); transparent where no valid terrain was
+        rendered (the sky, nodata holes), antialiased at the outline.
     """
     with progress(progress_bar, 3, "bird's-eye map") as bar:
         gb = _gbuffer_of(
@@ -325,6 +351,8 @@ def birdseye_map(
             window_size=window_size,
             vert_exag=vert_exag,
             supersample=supersample,
+            size=size,
+            scale=scale,
         )
         bar.step("enhance")
         panels = birdseye_panels(
@@ -352,9 +380,11 @@ def sumi_e(
     *,
     view_azimuth: float = 135.0,
     elevation_angle: float = 20.0,
-    window_size: Sequence[int] = (1024, 768),
+    window_size: Sequence[int] | None = None,
     vert_exag: float = 1.5,
     supersample: int = 2,
+    size: int | Sequence[int] | None = None,
+    scale: float | None = None,
     interval: float | None = None,
     profile_width: float = 2.0,
     wash: float = 12.0,
@@ -372,6 +402,8 @@ def sumi_e(
     ----------
     dem : DEM, GBuffer, path, array or xarray.DataArray
         As in :func:`birdseye_map` (a low ``elevation_angle`` suits the style).
+    size, scale
+        The output size instead of ``window_size``, as in :func:`birdseye_map`.
     interval : float, optional
         Contour interval of the strokes; default a fifth of the automatic major interval.
     profile_width : float, default: 2
@@ -399,6 +431,8 @@ def sumi_e(
             window_size=window_size,
             vert_exag=vert_exag,
             supersample=supersample,
+            size=size,
+            scale=scale,
         )
         bar.step("ink")
         lay = birdseye_layers(

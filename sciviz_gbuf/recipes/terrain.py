@@ -23,6 +23,7 @@ from ..errors import InputError
 from ..readers import DEM
 from ._intervals import contour_intervals, nice_intervals, typical_slope
 from ._map import CONTOUR_COLOR, as_dem, check_line_sizes, composite, map_layers
+from ._resample import check_size_options, map_grid, resample_heights
 from .terrain_chunked import lazy_topographic_map
 
 __all__ = [
@@ -30,8 +31,10 @@ __all__ = [
     "as_dem",
     "composite",
     "contour_intervals",
+    "map_grid",
     "map_layers",
     "nice_intervals",
+    "resample_heights",
     "topographic_map",
     "typical_slope",
 ]
@@ -59,10 +62,13 @@ def topographic_map(
     variant: str = "regular",
     shadows: bool = False,
     sky_view: bool = False,
+    size: int | Sequence[int] | None = None,
+    scale: float | str | None = None,
+    dpi: float | None = None,
     progress_bar: bool = False,
 ) -> np.ndarray:
     """A plan-view topographic map of a DEM: colour bands, relief and contour lines (1990 Fig. 11
-    ``mx3``), one pixel per DEM cell.
+    ``mx3``), one pixel per DEM cell unless ``size``/``scale`` ask for another size.
 
     Parameters
     ----------
@@ -99,14 +105,40 @@ def topographic_map(
     sky_view : bool, default: False
         Darken cells that see less of the sky (valleys, pits; rayshader's ``ambient_shade``).
         Slow: about 1 MPix/s (16 directions, 50 cells out), minutes for a large DEM.
+    size : int or (int, int), optional
+        Output size in pixels: ``N`` the long side (the other keeps the grid's aspect, GDAL's
+        ``-outsize N 0``); ``(W, H)`` exactly, over the DEM's extent (``-outsize W H``; pixels
+        may be non-square); ``(W, 0)``/``(0, H)`` keep the aspect. Each side at most
+        ``LIMITS["image_side"]`` = 16384.
+    scale : float or str, optional
+        Instead of ``size``: output pixels per DEM cell (``scale=4``: four times the grid); or,
+        with ``dpi``, a map scale: ``scale=25000, dpi=300`` (or ``scale="1:25000"``) is 1:25000
+        printed at 300 dpi, ``25000 * 0.0254 / 300`` = 2.117 m of ground per output pixel in
+        both directions (QGIS print layout's scale and resolution).
+    dpi : float, optional
+        Print resolution of a map scale, at most ``LIMITS["dpi"]`` = 9600; only with
+        ``scale`` (to record a DPI in a PNG: :func:`~sciviz_gbuf.compose.write_png` ``dpi=``).
     progress_bar : bool, default: False
         Show a progress bar.
 
     Returns
     -------
     (H, W, 4) uint8 RGBA
-        On the DEM's grid (row 0 north): its transform and CRS georeference the map
-        (:func:`~sciviz_gbuf.compose.write_geotiff`). Nodata cells are transparent (alpha 0).
+        On the DEM's grid (row 0 north), or on the output grid of ``size``/``scale`` over the
+        same extent: sides rounded to whole pixels, the pixel size ``extent / side``. The
+        DEM's transform and CRS georeference it (:func:`~sciviz_gbuf.compose.write_geotiff`
+        scales the transform to the image's size). Nodata cells are transparent (alpha 0).
+
+    Notes
+    -----
+    At another size the heights are first resampled onto the output grid
+    (:func:`resample_heights`: clamped cubic convolution where the map is larger than the grid,
+    area averages where it is smaller), then mapped as always: contour lines, relief and bands
+    are computed per output pixel, so lines are smooth rather than stair-stepped, line widths
+    and ``dense_spacing`` stay in output pixels, the relief uses the output pixel's size in
+    metres, and the default intervals follow the output pixels (majors at least 6 output
+    pixels apart). A DEM read in chunks (dask heights, out of core) is mapped one pixel per
+    cell only: ``size``/``scale`` giving another grid are refused with an InputError.
 
     Raises
     ------
@@ -116,10 +148,13 @@ def topographic_map(
     colour = _validate.rgb(contour_color, "contour_color")
     # before the DEM is read
     check_line_sizes(width=width, major_width=major_width, dense_spacing=dense_spacing)
+    check_size_options(size, scale, dpi)
     d = as_dem(dem)
     if not _dask.is_dask(d.mask) and not d.mask.any():
         # A fully transparent picture would look like success.
         raise InputError(f"{d.source or 'heights'}: every cell is nodata: nothing to map")
+    # Another size: the heights on the output grid first, then the map as always.
+    d = map_grid(d, size=size, scale=scale, dpi=dpi)
     # The map's options, the same for the in-memory and the chunked map.
     options = {
         "interval": interval,

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["encode_png", "write_png_fast"]
+__all__ = ["encode_png", "phys_chunk", "write_png_fast"]
 
 try:
     from isal import isal_zlib as _deflate
@@ -91,31 +91,47 @@ def _idat_parts(a: np.ndarray, level: int, threads: int | None) -> Iterator[byte
     yield _chunk(b"IDAT", struct.pack(">I", adler))
 
 
-def _pieces(image: np.ndarray, level: int, threads: int | None) -> Iterator[bytes]:
+def phys_chunk(dpi: float) -> bytes:
+    """The ``pHYs`` chunk of ``dpi`` dots per inch: whole pixels per metre on both axes (unit
+    1 = metre), rounded as Pillow rounds them."""
+    ppm = int(dpi / 0.0254 + 0.5)
+    return _chunk(b"pHYs", struct.pack(">IIB", ppm, ppm, 1))
+
+
+def _pieces(
+    image: np.ndarray, level: int, threads: int | None, dpi: float | None = None
+) -> Iterator[bytes]:
     a = np.ascontiguousarray(image, dtype=np.uint8)
     if a.ndim == 2:
         a = a[..., None]
     h, w, c = a.shape
     header = struct.pack(">IIBBBBB", w, h, 8, _COLOUR_TYPE[c], 0, 0, 0)
     yield b"\x89PNG\r\n\x1a\n" + _chunk(b"IHDR", header)
+    if dpi is not None:
+        yield phys_chunk(dpi)  # before IDAT, as the PNG specification requires
     yield from _idat_parts(a, level, threads)
     yield _chunk(b"IEND", b"")
 
 
-def encode_png(image: np.ndarray, *, level: int = 1, threads: int | None = None) -> bytes:
+def encode_png(
+    image: np.ndarray, *, level: int = 1, threads: int | None = None, dpi: float | None = None
+) -> bytes:
     """PNG bytes of a uint8 image ``(H, W)``, ``(H, W, 2)``, ``(H, W, 3)`` or ``(H, W, 4)``;
-    ``level`` 0-3 (ISA-L's range; zlib's levels above 3 are not used)."""
-    return b"".join(_pieces(image, level, threads))
+    ``level`` 0-3 (ISA-L's range; zlib's levels above 3 are not used); ``dpi``: a ``pHYs``
+    chunk of that resolution."""
+    return b"".join(_pieces(image, level, threads, dpi))
 
 
-def write_png_fast(path: Path, image: np.ndarray, *, level: int = 1) -> Path:
+def write_png_fast(
+    path: Path, image: np.ndarray, *, level: int = 1, dpi: float | None = None
+) -> Path:
     """Write the PNG of :func:`encode_png` to ``path`` chunk by chunk, as blocks finish.
 
     Raises OSError if the file on disk does not hold every byte written (a file system that
     accepted a short write without an error)."""
     written = 0
     with open(path, "wb") as f:
-        for piece in _pieces(image, level, None):
+        for piece in _pieces(image, level, None, dpi):
             written += f.write(piece)
     size = os.stat(path).st_size
     if size != written:

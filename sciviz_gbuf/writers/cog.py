@@ -135,7 +135,9 @@ def write_cog(
         afterwards) holds the pixels before the COG copy, so that folder needs about the
         output's size free twice.
     dem : sciviz_gbuf.readers.DEM, optional
-        Take ``transform`` and ``crs`` from this DEM; its shape must be the image's.
+        Take ``transform`` and ``crs`` from this DEM; an image of another size covers the
+        DEM's extent (the pixel size follows the image, as in
+        :func:`~sciviz_gbuf.compose.write_geotiff`).
     transform : 6 floats, optional
         GDAL geotransform of the pixel corners.
     crs : str, optional
@@ -165,7 +167,7 @@ def write_cog(
     InputError
         A path not ending in ``.tif``/``.tiff`` (``.png`` for ``overview_png``) or in a missing
         folder, no georeference (neither ``dem=`` nor ``transform=``) or both, a bad
-        transform or CRS, an image of another shape or dtype, a DEM of another shape, a bad
+        transform or CRS, an image of another shape or dtype, a bad
         ``overview_size`` or ``client``.
     OutputError
         The COG or its preview could not be written completely (disk full, file too large, a
@@ -353,9 +355,7 @@ def _profile(h: int, w: int, c: int, dem: Any, transform: Any, crs: Any) -> dict
     """rasterio profile of the temporary tiled GeoTIFF, georeference checked."""
     from rasterio.transform import Affine
 
-    if dem is not None and transform is None and crs is None and tuple(dem.shape) != (h, w):
-        raise InputError(f"dem: its shape {tuple(dem.shape)} is not the image's {(h, w)}")
-    gt = georeference(dem, transform, crs, "write_cog")
+    gt = georeference(dem, transform, crs, "write_cog", (h, w))
     # Temporary: fastest deflate; the COG copy recompresses anyway.
     return uint8_profile(
         h,

@@ -25,12 +25,24 @@ __all__ = [
 ]
 
 
-def georeference(dem: object, transform: object, crs: object, who: str) -> np.ndarray:
-    """The checked GDAL geotransform of ``dem=`` or ``transform=`` (exactly one of them)."""
+def georeference(
+    dem: object, transform: object, crs: object, who: str, shape: Sequence[int] | None = None
+) -> np.ndarray:
+    """The checked GDAL geotransform of ``dem=`` or ``transform=`` (exactly one of them).
+
+    ``shape``: the image's ``(rows, columns)``. An image of ``dem=`` on another grid than the
+    DEM's (a map drawn at another size, ``topographic_map(size=/scale=)``) covers the DEM's
+    extent: its pixel size is the DEM's times ``dem.shape / shape`` (``gdal_translate
+    -outsize``), so its transform follows the output pixel."""
     if dem is not None:
         if transform is not None or crs is not None:
             raise InputError(f"{who}: give dem= or transform=/crs=, not both")
         transform = dem.transform
+        if shape is not None and tuple(dem.shape) != tuple(shape):
+            (h, w), (oh, ow) = dem.shape, shape
+            x0, dx, rx, y0, ry, dy = (float(v) for v in transform)
+            fx, fy = w / ow, h / oh
+            transform = (x0, dx * fx, rx * fy, y0, ry * fx, dy * fy)
     if transform is None:
         raise InputError(f"{who}: a georeference is needed: pass dem= or transform=")
     gt = np.asarray(transform, dtype=np.float64).reshape(-1)
@@ -158,7 +170,9 @@ def write_geotiff(
         Float in ``[0, 1]``, uint8 or bool; written as 8-bit grey, RGB or RGBA (the fourth band
         tagged as alpha, so GIS software shows nodata as transparent).
     dem : sciviz_gbuf.readers.DEM, optional
-        Take ``transform`` and ``crs`` from this DEM (the grid the image was made on).
+        Take ``transform`` and ``crs`` from this DEM (the grid the image was made on); an
+        image of another size covers the DEM's extent (a map at another ``size``/``scale``):
+        the pixel size follows the image (see :func:`georeference`).
     transform : 6 floats, optional
         GDAL geotransform of the pixel corners.
     crs : str, optional
@@ -182,8 +196,8 @@ def write_geotiff(
         raise InputError(f"path: expected a file name ending in .tif or .tiff, got {str(p)!r}")
     if not p.parent.is_dir():
         raise InputError(f"path: no such directory {str(p.parent)!r}")
-    gt = georeference(dem, transform, crs, "write_geotiff")
     pixels = to_uint8(image)
+    gt = georeference(dem, transform, crs, "write_geotiff", pixels.shape[:2])
     if pixels.ndim == 2:
         pixels = pixels[..., None]
     try:

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import _validate
 from .._atomic import atomic_output
 from ..errors import InputError
 from ._png_encoder import write_png_fast
@@ -50,7 +51,7 @@ def to_uint8(rgb: np.ndarray) -> np.ndarray:
     return np.rint(np.clip(a, 0.0, 1.0) * 255.0).astype(np.uint8)
 
 
-def write_png(path: str | os.PathLike, image: np.ndarray) -> Path:
+def write_png(path: str | os.PathLike, image: np.ndarray, *, dpi: float | None = None) -> Path:
     """Write an image as PNG with Pillow.
 
     Parameters
@@ -59,6 +60,10 @@ def write_png(path: str | os.PathLike, image: np.ndarray) -> Path:
         Output file; its directory must exist.
     image : (H, W), (H, W, 3) or (H, W, 4) array_like
         Float in ``[0, 1]``, uint8 or bool (grey, RGB or RGBA).
+    dpi : float, optional
+        Record this print resolution in the file (the PNG ``pHYs`` chunk, in whole pixels per
+        metre: 300 dpi is stored as 11811 px/m and read back as 299.9994); at most
+        ``LIMITS["dpi"]`` = 9600. Default: none recorded.
 
     Returns
     -------
@@ -81,13 +86,16 @@ def write_png(path: str | os.PathLike, image: np.ndarray) -> Path:
         raise InputError(f"path: expected a file name ending in .png, got {str(p)!r}")
     if not p.parent.is_dir():
         raise InputError(f"path: no such directory {str(p.parent)!r}")
+    if dpi is not None:
+        dpi = _validate.size(dpi, "dpi", "dpi")
     pixels = to_uint8(image)
     with atomic_output(path) as part:
         if pixels.shape[0] * pixels.shape[1] >= LARGE_IMAGE:
-            write_png_fast(part.path, pixels)  # checks the size on disk itself
+            write_png_fast(part.path, pixels, dpi=dpi)  # checks the size on disk itself
         else:
+            extra = {} if dpi is None else {"dpi": (dpi, dpi)}
             with open(part.path, "wb") as f:
-                Image.fromarray(pixels).save(f, format="PNG")
+                Image.fromarray(pixels).save(f, format="PNG", **extra)
                 # Pillow writes through this buffered file: the size it reached is what the
                 # disk must hold once the buffer is flushed by close().
                 part.expected_size = f.tell()

@@ -144,12 +144,20 @@ def test_bad_inputs(tmp_path, kwargs, message):
         write_cog(args.pop("image"), args.pop("path"), **args)
 
 
-def test_dem_shape_mismatch(tmp_path):
+def test_image_of_another_size_covers_the_dems_extent(tmp_path):
+    """A map drawn at another size (topographic_map(size=/scale=)) keeps the DEM's extent:
+    the COG's pixel size follows the image (gdal_translate -outsize)."""
+    import rasterio
+
     from sciviz_gbuf.readers import read_dem
 
-    dem = read_dem(np.zeros((9, 9), np.float32))
-    with pytest.raises(InputError, match="shape"):
-        write_cog(np.zeros((8, 8, 4), np.uint8), tmp_path / "x.tif", dem=dem)
+    dem = read_dem(np.zeros((9, 12), np.float32), spacing=10.0)
+    write_cog(np.zeros((18, 30, 4), np.uint8), tmp_path / "x.tif", dem=dem)
+    with rasterio.open(tmp_path / "x.tif") as src:
+        gt = src.transform.to_gdal()
+        assert (src.height, src.width) == (18, 30)
+    x0, dx, _, y0, _, dy = dem.transform
+    assert gt == pytest.approx((x0, dx * 12 / 30, 0.0, y0, 0.0, dy * 9 / 18))
 
 
 # --- command line ------------------------------------------------------------------------------

@@ -1,0 +1,99 @@
+"""``topo``/``birdseye`` ``--size``, ``--scale``, ``--dpi``: the output's size, the GeoTIFF's
+transform and the PNG's DPI follow; bad or conflicting values exit 2 with one line."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from sciviz_gbuf.cli import main
+from tests.helpers.cli import run_cli
+
+rasterio = pytest.importorskip("rasterio")
+
+
+@pytest.fixture
+def dem_asc(tmp_path):
+    """A 30 x 20 ESRI ASCII grid of 10 m cells (a smooth hill)."""
+    r, c = np.mgrid[0:20, 0:30].astype(np.float64)
+    z = 100.0 + 40.0 * np.exp(-((c - 14.3) ** 2 + (r - 9.6) ** 2) / 60.0)
+    path = tmp_path / "hill.asc"
+    header = "ncols 30\nnrows 20\nxllcorner 500000\nyllcorner 4000000\ncellsize 10\n"
+    rows = "\n".join(" ".join(f"{v:.3f}" for v in row) for row in z)
+    path.write_text(header + "NODATA_value -9999\n" + rows + "\n")
+    return path
+
+
+def test_topo_scale_writes_a_larger_map_and_georeference(dem_asc, tmp_path):
+    out, tif = tmp_path / "m.png", tmp_path / "m.tif"
+    argv = ["topo", str(dem_asc), "-o", str(out), "--scale", "2", "--geotiff", str(tif)]
+    assert main([*argv, "--no-progress"]) == 0
+    with Image.open(out) as im:
+        assert im.size == (60, 40) and "dpi" not in im.info
+    with rasterio.open(tif) as src:
+        assert (src.width, src.height) == (60, 40)
+        assert (src.transform.a, src.transform.e) == pytest.approx((5.0, -5.0))
+        assert tuple(src.bounds) == pytest.approx((500000, 4000000, 500300, 4000200))
+
+
+def test_topo_map_scale_and_dpi(dem_asc, tmp_path):
+    """1:10000 at 254 dpi: 1 m per pixel, 300 x 200 pixels; the PNG records 254 dpi; a COG
+    output follows the output pixel too."""
+    out = tmp_path / "m.png"
+    argv = ["topo", str(dem_asc), "-o", str(out), "--scale", "1:10000", "--dpi", "254"]
+    assert main([*argv, "--no-progress"]) == 0
+    with Image.open(out) as im:
+        assert im.size == (300, 200)
+        assert im.info["dpi"] == pytest.approx((254, 254), abs=0.01)
+    cog = tmp_path / "m.tif"
+    assert main(["topo", str(dem_asc), "-o", str(cog), "--size", "45", "--no-progress"]) == 0
+    with rasterio.open(cog) as src:
+        assert (src.width, src.height) == (45, 30)
+        assert src.transform.a == pytest.approx(300 / 45)
+
+
+def test_birdseye_size_and_dpi(dem_asc, tmp_path):
+    out = tmp_path / "b.png"
+    argv = ["birdseye", str(dem_asc), "-o", str(out), "--size", "160", "--supersample", "1"]
+    assert main([*argv, "--dpi", "150", "--no-progress"]) == 0
+    with Image.open(out) as im:
+        assert im.size == (160, 120)
+        assert im.info["dpi"] == pytest.approx((150, 150), abs=0.02)  # whole px per m
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--size", "100", "--scale", "2"], "scale: expected size= or scale=, not both"),
+        (["--scale", "1:25000"], "dpi: a map scale '1:25000' needs dpi="),
+        (["--size", "20000"], "size: expected an integer in [1, 16384]"),
+        (["--scale", "1000"], "scale: 1000.0 gives a map side of"),
+        (["--scale", "1:25000", "--dpi", "100000"], "dpi: expected a number in (0, 9600]"),
+        (["--chunks", "16", "--size", "64"], "--size: out of core (--chunks/--dask)"),
+    ],
+)
+def test_topo_refuses_bad_sizes_in_one_line(dem_asc, tmp_path, capsys, extra, message):
+    out = tmp_path / ("m.tif" if "--chunks" in extra else "m.png")
+    assert main(["topo", str(dem_asc), "-o", str(out), *extra, "--no-progress"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert message in err and "\n" not in err, err
+    assert not list(tmp_path.glob("m.*")) and not list(tmp_path.glob(".m.*"))
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["topo", "--size", "0"], "argument --size: expected a long side N or WIDTHxHEIGHT"),
+        (["topo", "--size", "12by4"], "argument --size: expected a long side N"),
+        (["topo", "--scale", "2:3"], "argument --scale: expected pixels per DEM cell"),
+        (["topo", "--dpi", "-5"], "argument --dpi: expected dots per inch > 0, got '-5'"),
+        (["birdseye", "--scale", "1:25000"], "scale: a map scale '1:25000' applies to plan-view"),
+    ],
+)
+def test_bad_values_exit_2_in_a_fresh_process(tmp_path, argv, message):
+    r = run_cli([*argv, "-o", tmp_path / "x.png", "--no-progress"])
+    assert r.returncode == 2
+    last = r.stderr.strip().splitlines()[-1]
+    assert message in last, r.stderr
+    assert "Traceback" not in r.stderr
