@@ -30,6 +30,7 @@ __all__ = [
     "is_plotter",
     "make_surface",
     "scene_items",
+    "split_normals",
 ]
 
 _CELL_ID = "__sciviz_gbuf_cell_id"
@@ -215,6 +216,96 @@ def _compute_normals(poly: pv.PolyData, feature_angle: float) -> pv.PolyData:
     return pv.wrap(alg.GetOutput())
 
 
+def _face_normals(points: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Unit face normals (zero for zero-area triangles) and twice the triangle areas."""
+    pts = np.asarray(points, dtype=np.float64)
+    a, b, c = (pts[triangles[:, k]] for k in range(3))
+    cross = np.cross(b - a, c - a)
+    area2 = np.linalg.norm(cross, axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        unit = np.where(area2[:, None] > 0, cross / area2[:, None], 0.0)
+    return unit, area2
+
+
+def split_normals(
+    poly: pv.PolyData, normals: np.ndarray, triangles: np.ndarray, feature_angle: float
+) -> tuple[pv.PolyData, np.ndarray, np.ndarray]:
+    """Split point normals that disagree with a face by more than ``feature_angle`` degrees.
+
+    A file's point normals are often averaged across the sharp edges of a CAD part (every
+    point is shared by all faces it touches), so a flat face near an edge would shade with
+    normals tilted towards its neighbour: streaks. Each corner whose point normal makes an
+    angle of more than ``feature_angle`` with its triangle's normal (orientation ignored:
+    some files wind the other way) gets a point of its own, with the area-weighted average
+    of the normals of the triangles around the point that lie within ``feature_angle`` of
+    its own (the smoothing ``vtkPolyDataNormals`` does with splitting on): the faces of a
+    crease shade flat, a smooth region beside it stays smooth. Agreeing corners keep the
+    file's normals. Point data of a split point is copied to its new points.
+
+    Returns ``(poly, normals, triangles)``, the inputs themselves when nothing disagrees.
+    """
+    if feature_angle >= 180.0 or triangles.shape[0] == 0:
+        return poly, normals, triangles
+    face, area2 = _face_normals(poly.points, triangles)
+    cos_limit = np.cos(np.radians(feature_angle))
+    unit = normals / np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-300)
+    # Triangles around each point (CSR), then every (corner, triangle around its point) pair.
+    flat = triangles.ravel()
+    order = np.argsort(flat, kind="stable")
+    start = np.searchsorted(flat[order], np.arange(poly.n_points + 1))
+    count = start[flat + 1] - start[flat]
+    corner = np.repeat(np.arange(flat.size), count)
+    offset = np.arange(corner.size) - np.repeat(np.cumsum(count) - count, count)
+    other = order[start[flat][corner] + offset] // 3
+    own = corner // 3
+    dots = np.einsum("ij,ij->i", face[own], face[other])
+    near = (np.abs(dots) >= cos_limit) & (area2[other] > 0)
+    # A corner is split when its point is shared across a sharp edge (a face around it turns
+    # by more than the feature angle from the corner's face) or its normal disagrees with
+    # its face by more than the feature angle.
+    across = np.zeros(flat.size, dtype=bool)
+    across[corner[~near & (area2[other] > 0)]] = True
+    corner_dot = np.abs(np.einsum("ij,ij->i", unit[flat], face[np.arange(flat.size) // 3]))
+    bad = (across | (corner_dot < cos_limit)) & (area2[np.arange(flat.size) // 3] > 0)
+    if not bad.any():
+        return poly, normals, triangles
+    index = np.full(flat.size, -1)
+    index[bad] = np.arange(int(bad.sum()))
+    sel = bad[corner]
+    corner, other, dots, near = index[corner[sel]], other[sel], dots[sel], near[sel]
+    bt, bk = np.divmod(np.flatnonzero(bad), 3)
+    bp = triangles[bt, bk]
+    # Neighbours wound the other way (an inconsistent file) count by orientation-free angle.
+    sign = np.where(dots < 0, -1.0, 1.0)
+    acc = np.zeros((bp.size, 3))
+    np.add.at(acc, corner[near], (face[other] * (area2[other] * sign)[:, None])[near])
+    length = np.linalg.norm(acc, axis=1, keepdims=True)
+    new_normals = np.where(length > 0, acc / np.maximum(length, 1e-300), face[bt])
+    # Keep the file's orientation: turn each new normal to the side of the one it replaces.
+    flip = np.einsum("ij,ij->i", new_normals, unit[bp]) < 0
+    new_normals[flip] *= -1.0
+    n0 = poly.n_points
+    out = pv.PolyData()
+    out.points = np.concatenate([np.asarray(poly.points), np.asarray(poly.points)[bp]])
+    tris = triangles.copy()
+    tris[bt, bk] = n0 + np.arange(bp.size)
+    out.faces = np.hstack([np.full((tris.shape[0], 1), 3), tris]).ravel()
+    for key in poly.point_data.keys():
+        arr = np.asarray(poly.point_data[key])
+        out.point_data[key] = np.concatenate([arr, arr[bp]])
+    for key in poly.cell_data.keys():
+        out.cell_data[key] = np.asarray(poly.cell_data[key])
+    all_normals = np.concatenate([normals, new_normals.astype(normals.dtype)])
+    name = poly.GetPointData().GetNormals()
+    key = name.GetName() if name is not None and name.GetName() else "Normals"
+    out.point_data[key] = all_normals
+    out.point_data.active_normals_name = key  # type: ignore[attr-defined]
+    tc = poly.GetPointData().GetTCoords()
+    if tc is not None and tc.GetName():
+        out.GetPointData().SetActiveTCoords(tc.GetName())
+    return out, all_normals, tris
+
+
 def _empty_surface(name: str) -> Surface:
     """The place of a dataset without surface cells: keeps ``object_id`` in scene order."""
     mesh = pv.PolyData()
@@ -303,7 +394,10 @@ def _make_surface(
         normals = _existing_normals(poly)
         tris = poly.GetPolys()
         conn = np.asarray(pv.convert_array(tris.GetConnectivityArray()), dtype=np.int64)
-    triangles = conn.reshape(-1, 3)
+        triangles = conn.reshape(-1, 3)
+    else:
+        # The file's normals may be smoothed across the edges the feature angle calls sharp.
+        poly, normals, triangles = split_normals(poly, normals, conn.reshape(-1, 3), feature_angle)
     cell_ids = np.asarray(poly.cell_data[_CELL_ID], dtype=np.int64)
     points = np.asarray(poly.points, dtype=np.float64)
     if transform is not None:

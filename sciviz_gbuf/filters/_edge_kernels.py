@@ -24,6 +24,8 @@ _DR4 = np.array([0, 0, 1, -1], dtype=np.int64)
 _DC4 = np.array([1, -1, 0, 0], dtype=np.int64)
 # Largest turn of the surface next to a depth crease, relative to the crease's own turn.
 _FLANK = 0.25
+# Largest turn of the buffer normals beside a normal crease, relative to the crease's turn.
+_NORMAL_FLANK = 0.3
 # Rows per parallel task. A task carries the pairs between consecutive rows over in a row
 # buffer, so each pair is classified once instead of once from each of its pixels; only the
 # pairs above a task's first row are classified twice.
@@ -81,10 +83,16 @@ def _pair_gap(sz, depth, m, r, c, dr, dc, steps, parallel, inv_d):
     s_l = (x - sz[r - dr, c - dc]) * steps if ok_l else 0.0
     s_r = (sz[r2 + dr, c2 + dc] - y) * steps if ok_r else 0.0
     gap = _unexplained(y - x, s_l, ok_l, s_r, ok_r)
-    if parallel:
-        return gap
-    near = min(np.float64(depth[r, c]), np.float64(depth[r2, c2]))
-    return gap * near * inv_d
+    if gap == 0.0:
+        return 0.0
+    scale = 1.0 if parallel else min(np.float64(depth[r, c]), np.float64(depth[r2, c2])) * inv_d
+    # Relative to the grazing angle: a surface displaced by noise (a scan, the facets of a
+    # decimated shape) by e along its normal moves by e / cos(theta) along the view ray, and
+    # the slope in footprints per pixel is tan(theta), so depth noise grows as sqrt(1 + s^2)
+    # with the gentler of the two slopes. A real occlusion has at least one side that is not
+    # grazing (or a gap far larger than the noise) and keeps its jump.
+    s = min(abs(s_l), abs(s_r)) * scale / steps
+    return gap * scale / math.sqrt(1.0 + s * s)
 
 
 @njit(inline="always", cache=True)
@@ -172,15 +180,89 @@ def _depth_crease(sz, depth, m, r, c, dr, dc, h, w, parallel, inv_d, inv_w, jump
     flank_r = _section_turn(depth, r2, c2, rp, cp, rp, cp, rpp, cpp, h, w, parallel, inv_d, inv_w)
     if max(flank_l, flank_r) > _FLANK * ang:
         return 0.0
+    # The section angle magnifies small dihedral angles on surfaces seen at grazing angles
+    # (it is the angle between the normals projected onto the section plane, and the normals
+    # of a grazing surface lie nearly along that plane's normal), so the facets of a
+    # decimated smooth shape there would read as creases. The flanks' own normals, from the
+    # section tangent and a tangent across it, give the dihedral angle itself.
+    dih = _flank_dihedral(sz, depth, m, rm, cm, rp, cp, dr, dc, h, w, parallel, inv_d, inv_w, jump)
+    if dih >= 0.0:
+        ang = min(ang, dih)
     s_left = np.float64(sz[r, c]) - np.float64(sz[rm, cm])
     s_right = np.float64(sz[rp, cp]) - np.float64(sz[r2, c2])
     return ang if s_right <= s_left else -ang
+
+
+@njit(cache=True)
+def _flank_normal(sz, depth, m, r, c, ax, ay, az, pr, pc, h, w, parallel, inv_d, inv_w, jump):
+    """Eye-space normal at (r, c) from the section tangent ``a`` and the central tangent
+    across it (direction ``p``); ``(0, 0, 0, False)`` if a pixel across is missing or beyond
+    a depth discontinuity."""
+    if not (_valid(sz, m, r - pr, c - pc) and _valid(sz, m, r + pr, c + pc)):
+        return 0.0, 0.0, 0.0, False
+    if _pair_gap(sz, depth, m, r - pr, c - pc, pr, pc, 1, parallel, inv_d) > jump:
+        return 0.0, 0.0, 0.0, False
+    if _pair_gap(sz, depth, m, r, c, pr, pc, 1, parallel, inv_d) > jump:
+        return 0.0, 0.0, 0.0, False
+    x0, y0, z0 = _eye(depth, r - pr, c - pc, h, w, parallel, inv_d, inv_w)
+    x1, y1, z1 = _eye(depth, r + pr, c + pc, h, w, parallel, inv_d, inv_w)
+    tx, ty, tz = x1 - x0, y1 - y0, z1 - z0
+    return ay * tz - az * ty, az * tx - ax * tz, ax * ty - ay * tx, True
+
+
+@njit(cache=True)
+def _flank_dihedral(sz, depth, m, rm, cm, rp, cp, dr, dc, h, w, parallel, inv_d, inv_w, jump):
+    """Angle in degrees between the surface normals at X - d = (rm, cm) and Y + d = (rp, cp),
+    from the depth alone; -1 where one of them cannot be estimated."""
+    pr, pc = dc, dr  # the direction across d
+    x0, y0, z0 = _eye(depth, rm - dr, cm - dc, h, w, parallel, inv_d, inv_w)
+    x1, y1, z1 = _eye(depth, rm, cm, h, w, parallel, inv_d, inv_w)
+    x2, y2, z2 = _eye(depth, rp, cp, h, w, parallel, inv_d, inv_w)
+    x3, y3, z3 = _eye(depth, rp + dr, cp + dc, h, w, parallel, inv_d, inv_w)
+    lx, ly, lz, ok_l = _flank_normal(
+        sz, depth, m, rm, cm, x1 - x0, y1 - y0, z1 - z0, pr, pc, h, w, parallel, inv_d, inv_w, jump
+    )
+    rx, ry, rz, ok_r = _flank_normal(
+        sz, depth, m, rp, cp, x3 - x2, y3 - y2, z3 - z2, pr, pc, h, w, parallel, inv_d, inv_w, jump
+    )
+    if not (ok_l and ok_r):
+        return -1.0
+    return _turn(lx, ly, lz, rx, ry, rz)
 
 
 @njit(inline="always", cache=True)
 def _dot(n, r, c, r2, c2):
     """float32 dot product of two normals, as the angle tests have always summed it."""
     return n[r, c, 0] * n[r2, c2, 0] + n[r, c, 1] * n[r2, c2, 1] + n[r, c, 2] * n[r2, c2, 2]
+
+
+@njit(cache=True)
+def _normal_flanks(sz, depth, normal, m, r, c, dr, dc, parallel, inv_d, jump, ang):
+    """``ang`` (the turn of the buffer normals from X to Y = X + d), or 0 if the normals on
+    either flank turn by more than ``_NORMAL_FLANK * ang`` over one pixel.
+
+    A crease separates surfaces whose normals change slowly; the normals of a noisy scan or
+    of a mesh with sub-pixel facets change at random from pixel to pixel, and so turn as
+    much beside the pair as across it. A flank pixel that is missing or beyond a depth
+    discontinuity (another surface) does not count.
+    """
+    r2, c2 = r + dr, c + dc
+    limit = math.cos(math.radians(_NORMAL_FLANK * ang))
+    rl, cl = r - dr, c - dc
+    if (
+        _valid(sz, m, rl, cl)
+        and _pair_gap(sz, depth, m, rl, cl, dr, dc, 1, parallel, inv_d) <= jump
+    ):
+        if _dot(normal, rl, cl, r, c) < limit:
+            return 0.0
+    rr, cr = r2 + dr, c2 + dc
+    if (
+        _valid(sz, m, rr, cr)
+        and _pair_gap(sz, depth, m, r2, c2, dr, dc, 1, parallel, inv_d) <= jump
+    ):
+        if _dot(normal, r2, c2, rr, cr) < limit:
+            return 0.0
+    return ang
 
 
 @njit(cache=True)
@@ -269,6 +351,10 @@ def pair_edge_kernel(
                     if geo == 0.0 and d >= cos_skip:
                         continue
                     ang = math.degrees(math.acos(min(1.0, max(-1.0, np.float64(d)))))
+                    if ang > abs(geo) and ang > crease:
+                        ang = _normal_flanks(
+                            sz, depth, normal, m, r, c, dr, dc, parallel, inv_d, jump, ang
+                        )
                     if ang > abs(geo):
                         # Convex iff (nY - nX) . (PY - PX) > 0 (monotone normal map).
                         x1, y1, z1 = _eye(depth, r, c, h, w, parallel, inv_d, inv_w)

@@ -28,6 +28,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
+from scipy import ndimage
 
 from .. import _validate
 from ..core.gbuffer import GBuffer, check_gbuffer
@@ -47,6 +48,8 @@ __all__ = [
 
 DEFAULT_DEPTH_JUMP = 1.0
 DEFAULT_CREASE_ANGLE = 30.0
+#: Shortest isolated piece of line drawn, in output pixels (see ``min_length``).
+DEFAULT_MIN_LENGTH = 5.0
 
 
 #: :func:`enhance` defaults (2003 §5): white inner edges, black profiles.
@@ -63,6 +66,11 @@ def _check_params(depth_jump: float, crease_angle: float, width: float) -> None:
         raise InputError(f"crease_angle: expected degrees in (0, 180), got {crease_angle!r}")
     # The dilation costs about 3 * width * supersample passes over the buffer: bounded.
     _validate.size(width, "width", "line_width", low=1.0, closed=True)
+
+
+def _check_min_length(min_length: float) -> float:
+    # Labelling costs the same for any length; the bound keeps the parameter a line length.
+    return _validate.size(min_length, "min_length", "line_width", low=0.0, closed=True)
 
 
 def _check_gb(gb: object) -> GBuffer:
@@ -106,6 +114,62 @@ def _pair_edges(gb: GBuffer, depth_jump: float, crease_angle: float, creases: bo
         crease,
     )
     return profile, crease
+
+
+def _outline(mask: np.ndarray) -> np.ndarray:
+    """Covered pixels with a 4-neighbour inside the image that is not covered."""
+    out = np.zeros_like(mask)
+    out[:, :-1] |= ~mask[:, 1:]
+    out[:, 1:] |= ~mask[:, :-1]
+    out[:-1, :] |= ~mask[1:, :]
+    out[1:, :] |= ~mask[:-1, :]
+    return out & mask
+
+
+def _clean(
+    gb: GBuffer, profile: np.ndarray, crease: np.ndarray, min_length: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Speck removal and hysteresis on the one-pixel line images of :func:`_pair_edges`.
+
+    The lines of both images form one drawing, so they are judged together. A connected
+    (8-neighbour) piece of strong ink (>= 0.5: a jump of at least 1.5 ``depth_jump`` or a
+    turn of 1.25 ``crease_angle``) stays if it is at least ``min_length`` output pixels long
+    or part of the outline of the coverage (a small object far away is drawn, however
+    small); weak ink stays only where it is connected to a strong piece that stays (Canny's
+    hysteresis: it continues lines, it does not start them). Noise of a scanned or decimated
+    surface leaves short isolated marks; the short edges of a real feature (a cube's corner)
+    are joined to the lines they meet and stay.
+    """
+    eight = np.ones((3, 3), dtype=bool)
+    strong = (profile >= 0.5) | (np.abs(crease) >= 0.5)
+    pieces, n = ndimage.label(strong, structure=eight)
+    keep = np.ones(n + 1, dtype=bool)
+    length = min_length * gb.supersample
+    if n and length > 0:
+        sizes = np.bincount(pieces.ravel(), minlength=n + 1)
+        outline = np.zeros(n + 1, dtype=bool)
+        outline[pieces[_outline(np.asarray(gb.mask, dtype=bool))]] = True
+        keep = (sizes >= length) | outline
+    keep[0] = False
+    kept = keep[pieces]
+    ink = (profile > 0.0) | (crease != 0.0)
+    lines, m = ndimage.label(ink & ~(strong & ~kept), structure=eight)
+    anchored = np.zeros(m + 1, dtype=bool)
+    anchored[lines[kept]] = True
+    anchored[0] = False
+    stay = anchored[lines]
+    if stay.sum() == ink.sum():
+        return profile, crease
+    zero = np.float32(0.0)
+    return np.where(stay, profile, zero), np.where(stay, crease, zero)
+
+
+def _lines(
+    gb: GBuffer, depth_jump: float, crease_angle: float, min_length: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Profile and signed crease lines, one buffer pixel wide, cleaned by :func:`_clean`."""
+    profile, crease = _pair_edges(gb, depth_jump, crease_angle)
+    return _clean(gb, profile, crease, min_length)
 
 
 def _disk(size: int) -> np.ndarray:
@@ -165,7 +229,11 @@ def _finish_signed(gb: GBuffer, signed: np.ndarray, width: float) -> np.ndarray:
 
 
 def profile_edges(
-    gb: GBuffer, *, depth_jump: float = DEFAULT_DEPTH_JUMP, width: float = 1.0
+    gb: GBuffer,
+    *,
+    depth_jump: float = DEFAULT_DEPTH_JUMP,
+    width: float = 1.0,
+    min_length: float = DEFAULT_MIN_LENGTH,
 ) -> np.ndarray:
     """Profile lines: 0th-order discontinuities of ``sz`` and the coverage outline (1990 §3.2).
 
@@ -179,14 +247,32 @@ def profile_edges(
         always full ink.
     width : float in [1, 64], default: 1
         Line width in output pixels, at most ``LIMITS["line_width"]`` = 64.
+    min_length : float in [0, 64], default: 5
+        Isolated pieces of line (not joined to other profile or crease ink, not part of the
+        coverage outline) shorter than this many output pixels are dropped, as are pieces
+        with only weak ink (hysteresis); 0 keeps every piece that has a strong pixel. At
+        most ``LIMITS["line_width"]`` = 64.
 
     Returns
     -------
     (H, W) float32 ink in [0, 1] at the output size (``gb.output_shape``).
+
+    Notes
+    -----
+    The jump is measured relative to the grazing angle: divided by ``sqrt(1 + s^2)``, ``s``
+    the gentler of the two one-sided slopes in footprints per pixel, because the depth of a
+    noisy or faceted surface wanders by that factor more where it is seen obliquely.
+    Isolated pieces are judged with the crease lines at the default ``crease_angle``, as in
+    :func:`crease_edges`: the two together make one drawing.
     """
     gb = _check_gb(gb)
     _check_params(depth_jump, DEFAULT_CREASE_ANGLE, width)
-    profile, _ = _pair_edges(gb, depth_jump, DEFAULT_CREASE_ANGLE, creases=False)
+    min_length = _check_min_length(min_length)
+    if min_length == 0:
+        profile, crease = _pair_edges(gb, depth_jump, DEFAULT_CREASE_ANGLE, creases=False)
+    else:
+        profile, crease = _pair_edges(gb, depth_jump, DEFAULT_CREASE_ANGLE)
+    profile, _ = _clean(gb, profile, crease, min_length)
     return _finish(gb, profile, width=width)[0]
 
 
@@ -196,6 +282,7 @@ def internal_edges(
     crease_angle: float = DEFAULT_CREASE_ANGLE,
     depth_jump: float = DEFAULT_DEPTH_JUMP,
     width: float = 1.0,
+    min_length: float = DEFAULT_MIN_LENGTH,
 ) -> np.ndarray:
     """Signed internal edges: 1st-order discontinuities, > 0 convex, < 0 concave (1990 §3.2).
 
@@ -205,6 +292,13 @@ def internal_edges(
     at 1.5 x ``crease_angle``, so it grows with the sharpness of the edge, as in the paper.
     Draw positive values white and negative ones black for the 1990 Fig. 7 style. ``width``:
     line width in output pixels in [1, 64] (at most ``LIMITS["line_width"]`` = 64).
+    ``min_length``: isolated pieces shorter than this are dropped, see :func:`profile_edges`.
+
+    A crease must be a crease on both scales the buffer shows: the normals beside the pair
+    turn by less than half as much as across it (noise and sub-pixel facets turn the normals
+    at random from pixel to pixel), and a crease seen in the depth is measured by the angle
+    between the flanks' normals (estimated from the depth), not by the section's own angle,
+    which grows without bound on surfaces seen at grazing angles.
 
     Returns
     -------
@@ -212,7 +306,7 @@ def internal_edges(
     """
     gb = _check_gb(gb)
     _check_params(depth_jump, crease_angle, width)
-    _, crease = _pair_edges(gb, depth_jump, crease_angle)
+    _, crease = _lines(gb, depth_jump, crease_angle, _check_min_length(min_length))
     return _finish_signed(gb, crease, width)
 
 
@@ -222,15 +316,17 @@ def crease_edges(
     crease_angle: float = DEFAULT_CREASE_ANGLE,
     depth_jump: float = DEFAULT_DEPTH_JUMP,
     width: float = 1.0,
+    min_length: float = DEFAULT_MIN_LENGTH,
 ) -> np.ndarray:
     """Crease lines: normal discontinuities sharper than ``crease_angle`` degrees (2003 §4).
 
     The unsigned counterpart of :func:`internal_edges`: ink in [0, 1] at the output size;
-    ``width`` in [1, 64] output pixels (at most ``LIMITS["line_width"]`` = 64).
+    ``width`` in [1, 64] output pixels (at most ``LIMITS["line_width"]`` = 64); isolated
+    pieces shorter than ``min_length`` output pixels are dropped (see :func:`profile_edges`).
     """
     gb = _check_gb(gb)
     _check_params(depth_jump, crease_angle, width)
-    _, crease = _pair_edges(gb, depth_jump, crease_angle)
+    _, crease = _lines(gb, depth_jump, crease_angle, _check_min_length(min_length))
     return _finish(gb, np.abs(crease), width=width)[0]
 
 

@@ -45,7 +45,11 @@ class Ref:
         j = self.sz[r2, c2] - self.sz[r, c]
         lo, hi = min(s_l, s_r), max(s_l, s_r)
         g = lo - j if j < lo else (j - hi if j > hi else 0.0)
-        return g if self.parallel else g * min(self.z[r, c], self.z[r2, c2]) / self.d
+        if g == 0.0:
+            return 0.0
+        k = 1.0 if self.parallel else min(self.z[r, c], self.z[r2, c2]) / self.d
+        s = min(abs(s_l), abs(s_r)) * k / n  # the gentler slope, footprints per pixel
+        return g * k / math.sqrt(1.0 + s * s)
 
     def eye(self, r, c):
         k = 1.0 if self.parallel else self.z[r, c] / self.d
@@ -72,9 +76,44 @@ class Ref:
             return 0.0
         if max(self.turn(seg[0], seg[1]), self.turn(seg[3], seg[4])) > 0.25 * ang:
             return 0.0
+        dih = self.flank_dihedral(pts[1], pts[4], (dr, dc))
+        if dih is not None:
+            ang = min(ang, dih)
         s_l = self.sz[pts[2]] - self.sz[pts[1]]
         s_r = self.sz[pts[4]] - self.sz[pts[3]]
         return ang if s_r <= s_l else -ang
+
+    def flank_normal(self, p, a, across):
+        """Normal at p from the section tangent a and the central tangent across it."""
+        (r, c), (pr, pc) = p, across
+        lo, hi = (r - pr, c - pc), (r + pr, c + pc)
+        if not (self.ok(*lo) and self.ok(*hi)):
+            return None
+        if self.gap(lo, p, across) > JUMP or self.gap(p, hi, across) > JUMP:
+            return None
+        return np.cross(a, self.eye(*hi) - self.eye(*lo))
+
+    def flank_dihedral(self, xm, yp, step):
+        """Angle between the depth's normals at X - d and Y + d, or None."""
+        (dr, dc) = step
+        a = self.eye(*xm) - self.eye(xm[0] - dr, xm[1] - dc)
+        b = self.eye(yp[0] + dr, yp[1] + dc) - self.eye(*yp)
+        nl = self.flank_normal(xm, a, (dc, dr))
+        nr = self.flank_normal(yp, b, (dc, dr))
+        if nl is None or nr is None:
+            return None
+        return self.turn(nl, nr)
+
+    def normal_flanks(self, x, y, step, ang):
+        """ang, or 0 if the normals beside the pair turn by more than 0.3 ang."""
+        (dr, dc) = step
+        limit = math.cos(math.radians(0.3 * ang))
+        for p, q in (((x[0] - dr, x[1] - dc), x), (y, (y[0] + dr, y[1] + dc))):
+            side = q if p in (x, y) else p
+            if self.ok(*side) and self.gap(p, q, step) <= JUMP:
+                if float(np.dot(self.n[p], self.n[q])) < limit:
+                    return 0.0
+        return ang
 
     def pixel(self, r, c):
         if not self.ok(r, c):
@@ -95,6 +134,8 @@ class Ref:
             geo = self.depth_crease(r, c, dr, dc)
             dot = float(np.clip(np.dot(self.n[r, c], self.n[r2, c2]), -1, 1))
             ang = math.degrees(math.acos(dot))
+            if ang > abs(geo) and ang > CREASE:
+                ang = self.normal_flanks((r, c), (r2, c2), (dr, dc), ang)
             if ang > abs(geo):
                 s = np.dot(self.n[r2, c2] - self.n[r, c], self.eye(r2, c2) - self.eye(r, c))
                 geo = ang if s >= 0 else -ang
