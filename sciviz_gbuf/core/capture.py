@@ -285,8 +285,11 @@ def capture(
         Render at ``supersample`` times the window size; :meth:`GBuffer.downsample` averages
         results back to the window size (antialiasing). At most ``LIMITS["supersample"]`` = 8.
     feature_angle : float, default: 30.0
-        For data without point normals: normals are computed and split at edges sharper than
-        this many degrees (PyVista's ``split_sharp_edges``); 180 smooths everything.
+        Normals are split at edges sharper than this many degrees: computed so for data
+        without point normals (PyVista's ``split_sharp_edges``), and a file's own point normals
+        are split where they are shared across such an edge or stray that far from their face
+        (:func:`~sciviz_gbuf.core.scene.split_normals`: flat CAD faces shade flat); 180 keeps
+        everything smooth and a file's normals as they are.
     progress_bar : bool, default: False
         Show a progress bar (PyVista convention).
     up : {"x", "y", "z"}, optional
