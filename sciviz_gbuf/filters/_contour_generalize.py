@@ -109,7 +109,29 @@ def local_linear(z: np.ndarray, valid: np.ndarray, sigma: float):
     return a, b, c
 
 
+#: Rows smoothed at a time: the fits keep ~25 float64 arrays of a strip, not of the grid.
+STRIP_ROWS = 256
+
+
 def smooth_field(
+    z: np.ndarray, valid: np.ndarray, interval: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`smooth_strip` strip by strip of ``STRIP_ROWS`` rows (each read with
+    ``SMOOTH_RADIUS`` rows around it: the same values as in one piece, bounded memory)."""
+    h = z.shape[0]
+    if h <= STRIP_ROWS + 2 * SMOOTH_RADIUS:
+        return smooth_strip(z, valid, interval)
+    out = np.empty(z.shape, np.float32)
+    grad = np.empty(z.shape, np.float32)
+    for a in range(0, h, STRIP_ROWS):
+        b = min(a + STRIP_ROWS, h)
+        lo, hi = max(0, a - SMOOTH_RADIUS), min(h, b + SMOOTH_RADIUS)
+        zs, gs = smooth_strip(z[lo:hi], valid[lo:hi], interval)
+        out[a:b], grad[a:b] = zs[a - lo : b - lo], gs[a - lo : b - lo]
+    return out, grad
+
+
+def smooth_strip(
     z: np.ndarray, valid: np.ndarray, interval: float
 ) -> tuple[np.ndarray, np.ndarray]:
     """The field smoothed as the local line spacing ``interval / g`` asks (module docstring)
