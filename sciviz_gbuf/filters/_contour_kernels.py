@@ -35,7 +35,9 @@ MAJOR_CAP = 15
 SPACING = 16  # hatching: d_i of Eq. 18-20
 SWITCH = 17  # hatching: spacing ratio where the in-between lines appear
 INV_FADE = 18  # hatching: 1 / width of that transition
-NPRM = 20
+GAP = 19  # the interval, or the smallest gap between levels (generalisation; not in kernels)
+MAJOR_WIDTH = 20  # width of the major lines (generalisation's default ring size; not in kernels)
+NPRM = 22
 
 _Z = np.float32(0.0)
 _H = np.float32(0.5)

@@ -11,9 +11,16 @@ import numpy as np
 
 from .. import _dask, _validate
 from ..errors import InputError
-from ..filters import cast_shadows, composite_map, contour_lines, fill_nodata_ring, hillshade
+from ..filters import (
+    cast_shadows,
+    composite_map,
+    contour_lines,
+    fill_nodata_ring,
+    hillshade,
+)
 from ..filters import sky_view as sky_view_factor
 from ..filters.bands import band_tables
+from ..filters.contours import contour_halo
 from ..readers import DEM, read_dem
 from ._intervals import contour_intervals
 
@@ -27,6 +34,7 @@ __all__ = [
     "lazy_dem",
     "lit",
     "map_band_tables",
+    "map_contour_halo",
     "map_contours",
     "map_layers",
     "relief_light",
@@ -123,6 +131,7 @@ def map_layers(
     width: float,
     major_width: float,
     dense_spacing: float,
+    generalize: bool,
     bands: object,
     cmap: object,
     sea_level: float | None,
@@ -156,6 +165,7 @@ def map_layers(
             width=width,
             major_width=major_width,
             dense_spacing=dense_spacing,
+            generalize=generalize,
         )
     if bar is not None:
         bar.step("relief")
@@ -200,22 +210,43 @@ def map_contours(
     width: float,
     major_width: float,
     dense_spacing: float,
+    generalize: bool = True,
 ):
     """The contour ink of a map (numpy or dask heights): majors never thin out, minors fade
     where they crowd closer than ``dense_spacing`` (Eq. 15, Fig. 11); without a major interval
-    the one family fades like minors."""
-    if major_interval is None:
-        return contour_lines(
-            z, interval=interval, width=width, c_dense=0.0, dense_spacing=dense_spacing
-        )
+    the one family fades like minors. ``generalize``: the cartographic generalisation of
+    :func:`~sciviz_gbuf.filters.contour_lines` (default ring size: 3 widths of the widest
+    line)."""
     return contour_lines(
         z,
-        interval=interval,
-        major_interval=major_interval,
-        width=width,
-        major_width=major_width,
-        dense_spacing=dense_spacing,
+        **_contour_options(interval, major_interval, width, major_width, dense_spacing),
+        generalize=generalize,
     )
+
+
+def map_contour_halo(
+    *,
+    interval: float,
+    major_interval: float | None,
+    width: float,
+    major_width: float,
+    dense_spacing: float,
+    generalize: bool = True,
+) -> int:
+    """The halo (cells) a chunk of :func:`map_contours` with these options needs (checks
+    them)."""
+    return contour_halo(
+        **_contour_options(interval, major_interval, width, major_width, dense_spacing),
+        generalize=generalize,
+    )
+
+
+def _contour_options(interval, major_interval, width, major_width, dense_spacing) -> dict:
+    if major_interval is None:
+        return {"interval": interval, "width": width, "c_dense": 0.0,
+                "dense_spacing": dense_spacing}  # fmt: skip
+    return {"interval": interval, "major_interval": major_interval, "width": width,
+            "major_width": major_width, "dense_spacing": dense_spacing}  # fmt: skip
 
 
 def composite(layers: dict, heights: np.ndarray, colour: np.ndarray) -> np.ndarray:

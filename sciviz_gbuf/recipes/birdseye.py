@@ -178,6 +178,7 @@ def birdseye_layers(
     major_width: float = 2.0,
     dense_spacing: float = 4.0,
     profile_width: float = 1.5,
+    generalize: bool = True,
     bands: bool | str | float | Sequence[float] = True,
     cmap: str | object | None = None,
     sea_level: float | None = None,
@@ -196,7 +197,10 @@ def birdseye_layers(
         coverage, ``wz`` true height (NaN on the background), ``depth`` the eye distance
         normalised to [0, 1] over the terrain (near 0), all float32. Line sizes in output
         pixels: ``width``, ``major_width``, ``profile_width`` at most ``LIMITS["line_width"]``
-        = 64, ``dense_spacing`` at most ``LIMITS["spacing"]`` = 1024.
+        = 64, ``dense_spacing`` at most ``LIMITS["spacing"]`` = 1024. ``generalize``: the
+        cartographic generalisation of the ``cn`` contours (as in
+        :func:`~sciviz_gbuf.recipes.terrain.topographic_map`; rings up to 3 widths of the
+        widest line dropped), False for the exact lines.
     """
     check_line_sizes(
         width=width,
@@ -220,6 +224,7 @@ def birdseye_layers(
             width=width * k,
             major_width=major_width * k,
             dense_spacing=dense_spacing * k,
+            generalize=generalize,
         )
     sh = lambert(gb.world_normal(), light=_sun(azimuth, altitude), mask=valid)
     opts = check_bands(bands, major_interval if major_interval is not None else 5 * interval)

@@ -49,6 +49,7 @@ def topographic_map(
     width: float = 1.0,
     major_width: float = 2.0,
     dense_spacing: float = 4.0,
+    generalize: bool = True,
     contour_color: Sequence[float] = CONTOUR_COLOR,
     bands: bool | str | float | Sequence[float] = True,
     cmap: str | object | None = None,
@@ -86,6 +87,14 @@ def topographic_map(
     dense_spacing : float, default: 4
         Minor lines fade out where they come closer than this many pixels (Eq. 15,
         ``c_dense`` = background for minors, = line for majors, as in Fig. 11).
+    generalize : bool, default: True
+        Cartographic generalisation of the contour lines
+        (:func:`~sciviz_gbuf.filters.contour_lines` ``generalize=True``): the heights are
+        smoothed before contouring as much as the local line spacing allows (none where lines
+        are at most 3 px apart, up to a 4 px Gaussian on flat ground), so integer-metre
+        terraces and noise draw no specks or dashes; rings and specks within 3 widths of the
+        widest line (6 px by default) are dropped. False draws the exact lines of the heights
+        (those of ``gdal_contour``).
     contour_color : RGB, default: dark brown
     bands : bool, 'continuous', float or sequence of float, default: True
         Colour bands: True one band per major interval; a number, the band interval; a list,
@@ -163,6 +172,7 @@ def topographic_map(
         "width": width,
         "major_width": major_width,
         "dense_spacing": dense_spacing,
+        "generalize": _validate.boolean(generalize, "generalize"),
         "bands": bands,
         "cmap": cmap,
         "sea_level": sea_level,

@@ -2,13 +2,14 @@
 by chunk on dask, with the same pixels.
 
 Every layer is an operator with a bounded stencil (:mod:`sciviz_gbuf._dask`): contour lines
-(1 cell), the relief (GDAL's 3x3 window on a grid whose nodata ring is extrapolated: 1 + 2
-cells), the sky view (its ray length in cells), the colour bands and the composite (the cell
-itself). What needs the whole grid comes first, in one reduction pass over the heights: the
-height range (colour map ends, default contour intervals) and the median slope on
-:func:`~.terrain.slope_lattice` (default contour intervals). Giving ``interval``/
-``major_interval`` and ``vmin``/``vmax`` skips that pass. Cast shadows reach across the whole
-grid and are refused.
+(1 cell; generalised, plus the smoothing's reach and the largest ring removed, see
+:func:`~sciviz_gbuf.filters.contours.contour_halo`), the relief (GDAL's 3x3 window on a grid
+whose nodata ring is extrapolated: 1 + 2 cells), the sky view (its ray length in cells), the
+colour bands and the composite (the cell itself). What needs the whole grid comes first, in
+one reduction pass over the heights: the height range (colour map ends, default contour
+intervals) and the median slope on :func:`~.terrain.slope_lattice` (default contour
+intervals). Giving ``interval``/``major_interval`` and ``vmin``/``vmax`` skips that pass.
+Cast shadows reach across the whole grid and are refused.
 """
 
 from __future__ import annotations
@@ -19,13 +20,12 @@ from .. import _dask as _chunks
 from ..errors import InputError
 from ..filters import fill_nodata_ring, hillshade
 from ..filters import sky_view as sky_view_factor
-from ..filters.contours import RADIUS as CONTOUR_RADIUS
 from ..filters.hillshade import FILL_RING_RADIUS
 from ..filters.hillshade import RADIUS as HILLSHADE_RADIUS
 from ..filters.terrain_light import sky_view_reach
 from ..readers import DEM
 from ._intervals import choose_intervals, median_slope, slope_lattice
-from ._map import composite, flat_shade, map_band_tables, map_contours
+from ._map import composite, flat_shade, map_band_tables, map_contour_halo, map_contours
 
 __all__ = ["RELIEF_HALO", "lazy_topographic_map"]
 
@@ -70,6 +70,7 @@ def lazy_topographic_map(
     width: float,
     major_width: float,
     dense_spacing: float,
+    generalize: bool,
     bands,
     cmap,
     sea_level,
@@ -115,6 +116,7 @@ def lazy_topographic_map(
             "width": width,
             "major_width": major_width,
             "dense_spacing": dense_spacing,
+            "generalize": generalize,
         }
         return _windowed_map(
             z, colour, tables, ink_options if contours else None, light if relief else None,
@@ -129,6 +131,7 @@ def lazy_topographic_map(
             width=width,
             major_width=major_width,
             dense_spacing=dense_spacing,
+            generalize=generalize,
         )
     if relief:
         layers["sh"] = _chunks.map_stencil(
@@ -182,8 +185,8 @@ def _windowed_map(
     that of the chunks it computes, whatever the DEM's size."""
     halo = 0
     if ink_options is not None:
-        halo = CONTOUR_RADIUS
-        map_contours(np.zeros((3, 3), np.float32), **ink_options)  # checks now
+        # the contour stencil, plus with generalisation its smoothing and ring size
+        halo = map_contour_halo(**ink_options)  # checks the options now
     if light is not None:
         halo = max(halo, RELIEF_HALO)
         if sky_view:

@@ -549,3 +549,28 @@ def test_polylines_empty_and_errors():
         contour_polylines(np.zeros((5, 5)), interval=1.0, transform=(1, 2, 3))
     with pytest.raises(InputError, match="at most"):
         contour_polylines(np.array([[0.0, 1e9]]), interval=1e-3)
+
+
+def test_generalised_lines_do_not_depend_on_the_smoothing_strips(monkeypatch):
+    """The smoothing runs in row strips (bounded memory): the same pixels as in one piece."""
+    from sciviz_gbuf.filters import _contour_generalize
+
+    rng = np.random.default_rng(5)
+    z = np.cumsum(rng.normal(size=(120, 70)), axis=0).astype(np.float32)
+    z[rng.random(z.shape) < 0.03] = np.nan
+    whole = contour_lines(z, interval=2.0, generalize=True)
+    monkeypatch.setattr(_contour_generalize, "STRIP_ROWS", 7)
+    assert np.array_equal(contour_lines(z, interval=2.0, generalize=True), whole)
+    assert not np.array_equal(contour_lines(z, interval=2.0), whole)  # it did generalise
+
+
+def test_generalize_options_are_checked():
+    z = np.zeros((5, 5), np.float32)
+    with pytest.raises(InputError, match="min_ring: only used with generalize=True"):
+        contour_lines(z, interval=1.0, min_ring=3.0)
+    with pytest.raises(InputError, match="gradient: not used with generalize=True"):
+        contour_lines(z, interval=1.0, generalize=True, gradient=z)
+    with pytest.raises(InputError, match="generalize: expected True or False"):
+        contour_lines(z, interval=1.0, generalize=1)
+    with pytest.raises(InputError, match="min_ring: expected a number in"):
+        contour_lines(z, interval=1.0, generalize=True, min_ring=-1.0)

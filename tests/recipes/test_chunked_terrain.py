@@ -201,6 +201,45 @@ def test_windowed_map_of_a_file_is_bit_identical_with_independent_tasks(name, ch
     assert _same(lazy.compute(), ref)
 
 
+@pytest.mark.parametrize("min_ring", [None, 4.0, 20.0])
+def test_generalised_contours_with_rings_bit_identical(min_ring):
+    """Many rings of 5-20 px across chunk borders: the ring rule decides each ring alike in
+    memory and chunk by chunk (a ring at most ``min_ring`` px wide is seen whole within the
+    halo)."""
+    y, x = np.mgrid[0:96, 0:96].astype(np.float32)
+    z = (np.sin(x / 2.1) * np.cos(y / 1.7) * 4.0 + np.sin(x / 5.0 + y / 7.0) * 6.0
+         + 0.02 * x).astype(np.float32)  # fmt: skip
+    kwargs = {"interval": 1.0, "generalize": True, "min_ring": min_ring}
+    ref = contour_lines(z, **kwargs)
+    assert _same(contour_lines(da.from_array(z, chunks=(23, 29)), **kwargs).compute(), ref)
+    if min_ring is None:
+        exact = contour_lines(z, interval=1.0)  # the rule removed something here
+        assert (exact > 0).sum() > (ref > 0).sum()
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        {"interval": 40.0, "base": 10.0, "min_ring": 0.0},  # lines ~16 px apart: sigma 3.3
+        {"interval": 5.0, "major_interval": 25.0, "min_ring": 0.0},  # the map's families
+    ],
+)
+def test_generalised_contours_bit_identical_and_smoothing_halo(hugo, monkeypatch, kwargs):
+    """Generalised lines of hugo (half nodata) chunk by chunk equal those in memory. The
+    smoothing reads ``SMOOTH_RADIUS`` = 12 cells and the 3x3 operator one more; that last
+    cell is read only through the 3x3 range test of a level (which flips only for a value
+    within rounding of a level), so it is two cells less that visibly break the pixels."""
+    kwargs = {**kwargs, "generalize": True}
+    ref = contour_lines(hugo.heights, **kwargs)
+    lazy = contour_lines(da.from_array(hugo.heights, chunks=(21, 25)), **kwargs)
+    assert len(lazy.chunks[0]) > 1 and len(lazy.chunks[1]) > 1  # chunk borders both ways
+    assert _same(lazy.compute(), ref)
+    mod = _module(contour_lines)
+    monkeypatch.setattr(mod, "SMOOTH_RADIUS", mod.SMOOTH_RADIUS - 2)
+    short = contour_lines(da.from_array(hugo.heights, chunks=(21, 25)), **kwargs)
+    assert not _same(short.compute(), ref)
+
+
 def test_windowed_map_halo_is_exact(monkeypatch):
     d = _read_lazy("hugo_site.asc", ODD)
     assert _dask.windows_of(d.heights) is not None

@@ -10,6 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from PIL import Image
+from scipy import ndimage
 
 import sciviz_gbuf as sg
 from sciviz_gbuf.cli import main
@@ -31,8 +32,6 @@ def plane_dem(shape=(80, 90), east=0.4, north=-0.25, spacing=10.0):
 
 def blob_hole(shape, seed=3):
     """An irregular nodata region touching nothing but itself (a random blob)."""
-    from scipy import ndimage
-
     rng = np.random.default_rng(seed)
     noise = ndimage.gaussian_filter(rng.standard_normal(shape), 6)
     return noise > np.quantile(noise, 0.7)
@@ -41,18 +40,24 @@ def blob_hole(shape, seed=3):
 # ------------------------------------------------------------------------- plan-view map
 
 
-def test_nodata_hole_changes_nothing_outside_itself():
+@pytest.mark.parametrize("generalize", [False, True])
+def test_nodata_hole_changes_nothing_outside_itself(generalize):
     """A plane with an irregular hole: every valid pixel is as without the hole (relief,
-    bands and contours), so the hole leaves no line, edge or terrace at its border."""
+    bands and contours), so the hole leaves no line, edge or terrace at its border. With
+    generalisation, line stubs the hole cuts to at most one line width (2 px) go as specks
+    do: changes stay within 3 px of the hole."""
     z = plane_dem()
     hole = blob_hole(z.shape)
     holed = z.copy()
     holed[hole] = np.nan
-    full = sg.topographic_map(read_dem(z, spacing=10.0), **FIXED)
-    cut = sg.topographic_map(read_dem(holed, spacing=10.0), **FIXED)
+    full = sg.topographic_map(read_dem(z, spacing=10.0), generalize=generalize, **FIXED)
+    cut = sg.topographic_map(read_dem(holed, spacing=10.0), generalize=generalize, **FIXED)
     assert (cut[hole] == 0).all()  # transparent black
     assert (cut[~hole, 3] == 255).all()
-    diff = np.abs(full[~hole].astype(int) - cut[~hole].astype(int))
+    far = ~hole
+    if generalize:
+        far = ~ndimage.binary_dilation(hole, np.ones((3, 3), bool), iterations=3)
+    diff = np.abs(full[far].astype(int) - cut[far].astype(int))
     assert diff.max() <= 1, diff.max()
     # and the plane did get contour lines (the test is not vacuous)
     no_lines = sg.topographic_map(read_dem(z, spacing=10.0), contours=False, **FIXED)
@@ -359,3 +364,73 @@ def test_odd_grids_give_a_map(h, w, offset, scale, seed):
     m = sg.topographic_map(read_dem(z, spacing=5.0), shadows=True)
     assert m.shape == (h, w, 4) and m.dtype == np.uint8
     np.testing.assert_array_equal(m[..., 3] == 0, ~np.isfinite(z))
+
+
+# ------------------------------------------------------------- contour generalisation
+
+
+SHARED_DEMS = ["SRTMGL3_40.09_-105.55_40.21_-105.35.asc", "hugo_site.asc",
+               "pre_runout_DEM.asc", "N10W110.hgt"]  # fmt: skip
+
+
+def isolated_per_1000(rgba: np.ndarray, largest: int = 6) -> tuple[float, int]:
+    """(isolated components of at most ``largest`` px per 1000 ink px, ink px) of a map drawn
+    with ``bands=False, relief=False``: ink is any pixel the contour colour darkened
+    (8-connected components of the ink layer, every visible mark counted)."""
+    ink = (rgba[..., 3] > 0) & (rgba[..., :3] < 255).any(axis=-1)
+    labels, _ = ndimage.label(ink, np.ones((3, 3), bool))
+    sizes = np.bincount(labels.ravel())[1:]
+    return 1000.0 * np.count_nonzero(sizes <= largest) / max(int(ink.sum()), 1), int(ink.sum())
+
+
+def _variants(shared_data, name: str):
+    """The shared DEM, rounded to whole metres, and with 0.3 m of noise."""
+    import dataclasses
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)  # the SRTM .asc has no CRS
+        d = read_dem(shared_data / "dem" / name)
+    noise = np.random.default_rng(1).normal(0.0, 0.3, d.heights.shape)
+    return {
+        "as is": d,
+        "integer metres": dataclasses.replace(d, heights=np.round(d.heights)),
+        "noise 0.3 m": dataclasses.replace(d, heights=(d.heights + noise).astype(np.float32)),
+    }
+
+
+@pytest.mark.parametrize("name", SHARED_DEMS)
+def test_default_maps_of_shared_dems_have_no_specks(shared_data, name):
+    """Generalised contours (the default): <= 2 isolated <= 6 px ink components per 1000 ink
+    px, also when the DEM is rounded to whole metres or 0.3 m of noise is added; the exact
+    lines (``generalize=False``) of the same maps have many (the measure can fail)."""
+    variants = _variants(shared_data, name)
+    if name == "N10W110.hgt":  # 1201^2 and almost all sea: the heights as they are suffice
+        variants = {"as is": variants["as is"]}
+    for label, d in variants.items():
+        specks, ink = isolated_per_1000(sg.topographic_map(d, bands=False, relief=False))
+        assert ink > 200, (label, ink)
+        assert specks <= 2.0, (label, specks)
+    if name != "N10W110.hgt":
+        exact, _ = isolated_per_1000(
+            sg.topographic_map(variants["noise 0.3 m"], bands=False, relief=False,
+                               generalize=False)
+        )  # fmt: skip
+        assert exact > 8.0, exact
+
+
+def test_generalisation_keeps_summits_and_drops_small_rings():
+    """Two cones (0.5 m/px): the 20 m ring of the 24 m summit stays; the 10 m ring on top of
+    the 10.5 m summit (1 px radius) is drawn exactly but generalised away; their lower rings
+    stay."""
+    y, x = np.mgrid[0:80, 0:120].astype(np.float32)
+    r_big, r_small = np.hypot(x - 30, y - 40), np.hypot(x - 90, y - 40)
+    z = np.maximum(0.0, 24.0 - 0.5 * r_big) + np.maximum(0.0, 10.5 - 0.5 * r_small)
+    ink = sg.filters.contour_lines(z, interval=5.0, width=1.0, generalize=True)
+    exact = sg.filters.contour_lines(z, interval=5.0, width=1.0)
+    assert exact[r_small < 2.5].max() > 0.5  # the exact lines draw the small top ring ...
+    assert ink[r_small < 3.5].max() == 0.0  # ... generalised, it is gone
+    for r, radius in ((r_big, 38.0), (r_small, 11.0)):  # the 5 m rings stay where they were
+        assert ink[np.abs(r - radius) <= 1.0].mean() > 0.4
+    top = (r_big > 4.0) & (r_big < 9.0)  # the 20 m ring (radius 8 px) of the tall summit
+    assert ink[top].max() > 0.5

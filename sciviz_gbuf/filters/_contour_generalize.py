@@ -1,0 +1,194 @@
+"""Cartographic generalisation of contour lines: a height-aware smoothing of the field before
+the lines are drawn, and the removal of small rings after (used by :mod:`.contours`).
+
+Smoothing. A level's position is steady where the ground is steep (the line moves
+``noise / g`` px for a height noise ``noise``, small when the gradient ``g`` is large) and
+wanders where it is flat: there integer-metre terraces and sensor noise make the level cross
+the ground many times, which draws specks and dashes. So the field is smoothed by a Gaussian
+whose width follows the local line spacing ``s = interval / g`` (in pixels, Eq. 9 units):
+``sigma = clip(SIGMA_PER_PX * (s - STEEP_SPACING), 0, SIGMA_MAX)``. Where lines are at most
+``STEEP_SPACING`` px apart nothing changes; on flat ground the field is averaged over up to
+``SIGMA_MAX`` px. The per-pixel sigma blends the field smoothed at the fixed widths ``SIGMAS``
+(linearly between the two around it), so the work is a few separable filters. ``g`` is taken
+from the field smoothed at ``SIGMA_SLOPE``, so noise does not pass for slope.
+
+Each smoothed value is a local linear (not constant) weighted fit over the valid cells
+(Gaussian-weighted least squares of ``z ~ a + b x + c y``, the value ``a``), so a plane stays
+the same plane up to nodata holes and the grid edge: holes and borders neither bend nor
+shift a line. Inside the data it is the ordinary Gaussian smoothing.
+
+Rings. After drawing, 8-connected components of any ink (> ``LOW_INK``) whose bounding box
+is at most ``min_ring`` px on its longer side are removed: rings too small to read and the
+specks of a level grazing flat ground; a component that touches the grid's edge or a nodata
+cell is an open line cut short, not a ring, and stays unless it is at most one widest line
+width long (a stub). Components are taken at a low
+threshold (hysteresis, as in Canny's edge linking): a line whose ink dips where the level is
+noisy stays one long component instead of breaking into short dashes that the size rule
+would remove. Real
+summits and pits whose rings are wider than ``min_ring`` stay.
+
+Both steps are local: the smoothing reads ``SMOOTH_RADIUS`` cells, and whether a component
+is at most ``min_ring`` px wide is decided within ``min_ring`` cells of it (a component seen
+through a window ``min_ring`` cells wider than the part it keeps is either whole, or reaches
+the window's edge and so is wider than ``min_ring``). Chunked evaluation with a halo of
+``RADIUS + SMOOTH_RADIUS + min_ring`` gives the same pixels as in memory.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+from scipy import ndimage
+
+#: Line spacing (px) up to which the field is left as it is: steep ground keeps exact lines.
+STEEP_SPACING = 3.0
+#: Growth of the smoothing width with the line spacing beyond that (px of sigma per px).
+SIGMA_PER_PX = 0.25
+#: The fixed smoothing widths (px) blended per pixel; 0 is the field itself.
+SIGMAS = (0.0, 1.0, 2.0, 4.0)
+SIGMA_MAX = SIGMAS[-1]
+#: Smoothing of the field whose gradient decides the local spacing.
+SIGMA_SLOPE = 1.0
+#: The least smoothing of the gradient that sets line widths and the crowding fade.
+SIGMA_GRADIENT = 1.0
+#: Gaussians are cut at this many sigmas.
+TRUNCATE = 3.0
+#: Cells read by the smoothing around each output cell.
+SMOOTH_RADIUS = math.ceil(TRUNCATE * SIGMA_MAX)
+#: Ink above which pixels join a component (the low threshold of the hysteresis): any.
+LOW_INK = 0.0
+
+
+def _kernels(sigma: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Gaussian weights ``G(d)``, ``G(d) d`` and ``G(d) d^2`` for offsets ``d`` in cells."""
+    r = math.ceil(TRUNCATE * sigma)
+    d = np.arange(-r, r + 1, dtype=np.float64)
+    g = np.exp(-0.5 * (d / sigma) ** 2)
+    g /= g.sum()
+    return g, g * d, g * d * d
+
+
+def _pass(a: np.ndarray, w: np.ndarray, axis: int) -> np.ndarray:
+    # Outside the grid counts as no data (weight 0), like a nodata cell: the same rule at the
+    # grid's edge as at a chunk cut by the grid's edge.
+    return ndimage.correlate1d(a, w, axis=axis, mode="constant", cval=0.0)
+
+
+def local_linear(z: np.ndarray, valid: np.ndarray, sigma: float):
+    """``(a, b, c)``: at each cell the Gaussian-weighted least-squares plane
+    ``a + b dx + c dy`` of the valid cells around it (offsets in cells, x = column, y = row);
+    where fewer than three cells span a plane, the weighted mean and no slope."""
+    v = valid.astype(np.float64)
+    vz = np.where(valid, z, 0.0).astype(np.float64)
+    g, gd, gdd = _kernels(sigma)
+    # x passes, then y passes of the moments of v and v z.
+    v0, v1, v2 = (_pass(v, k, 1) for k in (g, gd, gdd))
+    z0, z1 = (_pass(vz, k, 1) for k in (g, gd))
+    m0, my, myy = (_pass(v0, k, 0) for k in (g, gd, gdd))
+    mx, mxy = (_pass(v1, k, 0) for k in (g, gd))
+    mxx = _pass(v2, g, 0)
+    mz, myz = (_pass(z0, k, 0) for k in (g, gd))
+    mxz = _pass(z1, g, 0)
+    # Solve [[m0 mx my] [mx mxx mxy] [my mxy myy]] (a b c) = (mz mxz myz) by Cramer's rule.
+    c00 = mxx * myy - mxy * mxy
+    c01 = mxy * my - mx * myy
+    c02 = mx * mxy - mxx * my
+    det = m0 * c00 + mx * c01 + my * c02
+    c11 = m0 * myy - my * my
+    c12 = mx * my - m0 * mxy
+    c22 = m0 * mxx - mx * mx
+    with np.errstate(divide="ignore", invalid="ignore"):
+        # a plane needs a spread of cells: det relative to m0^3 sigma^4 (a full window ~ 1)
+        ok = det > 1e-3 * m0**3 * sigma**4
+        inv = np.where(ok, 1.0 / det, 0.0)
+        a = np.where(ok, (c00 * mz + c01 * mxz + c02 * myz) * inv, mz / m0)
+        b = (c01 * mz + c11 * mxz + c12 * myz) * inv
+        c = (c02 * mz + c12 * mxz + c22 * myz) * inv
+    return a, b, c
+
+
+#: Rows smoothed at a time: the fits keep ~25 float64 arrays of a strip, not of the grid.
+STRIP_ROWS = 256
+
+
+def smooth_field(
+    z: np.ndarray, valid: np.ndarray, interval: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`smooth_strip` strip by strip of ``STRIP_ROWS`` rows (each read with
+    ``SMOOTH_RADIUS`` rows around it: the same values as in one piece, bounded memory)."""
+    h = z.shape[0]
+    if h <= STRIP_ROWS + 2 * SMOOTH_RADIUS:
+        return smooth_strip(z, valid, interval)
+    out = np.empty(z.shape, np.float32)
+    grad = np.empty(z.shape, np.float32)
+    for a in range(0, h, STRIP_ROWS):
+        b = min(a + STRIP_ROWS, h)
+        lo, hi = max(0, a - SMOOTH_RADIUS), min(h, b + SMOOTH_RADIUS)
+        zs, gs = smooth_strip(z[lo:hi], valid[lo:hi], interval)
+        out[a:b], grad[a:b] = zs[a - lo : b - lo], gs[a - lo : b - lo]
+    return out, grad
+
+
+def smooth_strip(
+    z: np.ndarray, valid: np.ndarray, interval: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The field smoothed as the local line spacing ``interval / g`` asks (module docstring)
+    and its gradient magnitude (per cell), both float32 and NaN where not ``valid``.
+
+    The gradient is that of the same blend of fits but at least ``SIGMA_GRADIENT`` wide: it
+    sets the lines' widths and where minors fade for crowding (Eq. 15), and a gradient that
+    flickers with the height noise of steep ground would make the fade flicker into dashes
+    (positions are those of the field alone, so they do not move)."""
+    z64 = z.astype(np.float64)
+    fits = {s: local_linear(z64, valid, s) for s in SIGMAS[1:]}
+    _, b, c = fits[SIGMA_SLOPE]  # one of SIGMAS
+    g = np.hypot(b, c)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        spacing = np.where(g > 0, interval / g, np.inf)
+    sigma = np.clip(SIGMA_PER_PX * (spacing - STEEP_SPACING), 0.0, SIGMA_MAX)
+    sigma_g = np.maximum(sigma, SIGMA_GRADIENT)
+    out = np.where(valid, z64, np.nan)
+    gx = gy = np.zeros_like(out)
+    lower = (out, gx, gy)
+    for s0, s1 in itertools.pairwise(SIGMAS):
+        upper = fits[s1]
+        t = np.clip((sigma - s0) / (s1 - s0), 0.0, 1.0)
+        out = np.where((sigma > s0) & (sigma <= s1), (1.0 - t) * lower[0] + t * upper[0], out)
+        t = np.clip((sigma_g - s0) / (s1 - s0), 0.0, 1.0)
+        here = (sigma_g > s0) & (sigma_g <= s1)
+        gx = np.where(here, (1.0 - t) * lower[1] + t * upper[1], gx)
+        gy = np.where(here, (1.0 - t) * lower[2] + t * upper[2], gy)
+        lower = upper
+    out = np.where(valid, out, np.nan).astype(np.float32)
+    return out, np.where(valid, np.hypot(gx, gy), np.nan).astype(np.float32)
+
+
+def drop_small_rings(
+    ink: np.ndarray, min_ring: float, valid: np.ndarray, min_stub: float
+) -> np.ndarray:
+    """``ink`` without the 8-connected components (of ink > ``LOW_INK``) whose bounding box is
+    at most ``min_ring`` px on its longer side and that touch neither the grid's edge nor a
+    cell that is not ``valid`` (closed rings and specks), and those at most ``min_stub`` px
+    that do (stubs: lines that nodata or the edge cut short stay if longer)."""
+    if min_ring <= 0:
+        return ink
+    eight = np.ones((3, 3), bool)
+    labels, n = ndimage.label(ink > LOW_INK, structure=eight)
+    if n == 0:
+        return ink
+    boxes = ndimage.find_objects(labels)
+    extent = np.array([max(b[0].stop - b[0].start, b[1].stop - b[1].start) for b in boxes])
+
+    def touching(cells: np.ndarray) -> np.ndarray:
+        return np.bincount(labels[cells], minlength=n + 1)[1:] > 0
+
+    cut = ndimage.binary_dilation(~valid, structure=eight)
+    cut[0, :] = cut[-1, :] = cut[:, 0] = cut[:, -1] = True
+    open_ends = np.bincount(labels[cut], minlength=n + 1)[1:] > 0
+    small = (extent <= min_ring) & (~open_ends | (extent <= min_stub))
+    small = np.concatenate([[False], small])
+    out = ink.copy()
+    out[small[labels]] = 0.0
+    return out
