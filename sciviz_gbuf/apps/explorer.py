@@ -487,6 +487,7 @@ class Explorer:
             "width": kw["width"],
             "major_width": kw["major_width"],
             "dense_spacing": 4.0,
+            "generalize": True,  # topographic_map's default: the explorer shows that map
             "cmap": None,
             "sea_level": None,
             "azimuth": kw["azimuth"],

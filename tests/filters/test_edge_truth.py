@@ -300,8 +300,9 @@ def test_stl_truth_lies_on_the_capture(shared_data):
     truth = visible_edge_truth(mesh, gb)
     assert truth["crease"].sum() > 300 and truth["silhouette"].sum() > 300
     assert not truth["border"].any()
-    # every truth pixel is on the rendered part or right next to it (silhouettes)
-    _, recall = precision_recall(gb.mask, truth["all"], tol_px=1.0)
+    # every truth pixel is on the rendered part or right next to it, diagonals included
+    # (a silhouette sliver thinner than a pixel may cover no pixel centre)
+    _, recall = precision_recall(gb.mask, truth["all"], tol_px=1.5)
     assert recall == 1.0
 
 
