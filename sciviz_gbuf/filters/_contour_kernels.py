@@ -4,6 +4,9 @@ kernels of :mod:`._stencil` after the Eq. 9 gradient.
 All parameters travel in one float32 vector ``prm`` (layout below) so that one cached kernel
 serves every setting; they are loop-invariant, and the arithmetic is branch-free selects so the
 row loop still vectorises. Levels of :func:`levels_ink` follow the fixed slots.
+
+:func:`ring_opening` is the generalisation's removal of small rings and specks (an attribute
+opening of the ink image, used by :mod:`._contour_generalize`).
 """
 
 from __future__ import annotations
@@ -211,3 +214,81 @@ def hatch_ink(x, g, prm):
     c += w * _line(abs(_H - frac) * s, a, cap, prm)
     ok = (g > 0) & (g - g == 0)  # no gradient, no direction for the lines
     return _finite_ink(c) if ok else _Z
+
+
+# ------------------------------------------------------------------ small rings and specks
+
+
+@njit(inline="always", cache=True)
+def _root(par, x):
+    """Union-find root of node ``x``, halving the path on the way."""
+    while par[x] != x:
+        par[x] = par[par[x]]
+        x = par[x]
+    return x
+
+
+@njit(cache=True)
+def ring_opening(ink, node, order, cut, min_ring, min_stub):
+    """The attribute opening of ``ink`` by the size of its 8-connected components: each pixel
+    keeps ``min(ink, T)`` for the highest ``T`` at which its component of ``ink >= T`` is
+    large, 0 if none is (Vincent 1993's area opening, with the attribute of
+    :func:`._contour_generalize.drop_small_rings`). Large: the longer side of the bounding box
+    exceeds ``min_ring``, or exceeds ``min_stub`` for a component with a pixel in ``cut``.
+
+    ``node``: (H, W) int32, -1 where ``ink`` is 0, else the pixel's rank in ``order`` (the
+    flat indices of the inked pixels, by decreasing ink). Components grow as ``T`` falls
+    (union-find, pixels added in that order); ``up`` keeps each merge's tree, so a pixel's
+    level is that of the first set on its way up that was large, each merge bounded by the
+    level it happened at."""
+    h, w = ink.shape
+    m = order.shape[0]
+    par = np.arange(m).astype(np.int32)
+    up = np.full(m, -1, np.int32)  # the root a set merged into (-1: still a root)
+    at = np.zeros(m, np.float32)  # the level of that merge
+    big = np.full(m, np.float32(-1.0), np.float32)  # level where the set became large
+    r0 = np.empty(m, np.int32)
+    r1 = np.empty(m, np.int32)
+    c0 = np.empty(m, np.int32)
+    c1 = np.empty(m, np.int32)
+    touch = np.zeros(m, np.bool_)
+    for k in range(m):
+        p = order[k]
+        pr, pc = p // w, p % w
+        v = ink[pr, pc]
+        r0[k], r1[k], c0[k], c1[k] = pr, pr, pc, pc
+        touch[k] = cut[pr, pc]
+        for rr in range(max(pr - 1, 0), min(pr + 2, h)):
+            for cc in range(max(pc - 1, 0), min(pc + 2, w)):
+                q = node[rr, cc]
+                if q < 0 or q >= k:  # not inked, or not yet added (k itself included)
+                    continue
+                a = _root(par, q)
+                if a == k:
+                    continue
+                par[a] = k  # k stays the root of its set while it is added
+                up[a] = k
+                at[a] = v
+                r0[k] = min(r0[k], r0[a])
+                r1[k] = max(r1[k], r1[a])
+                c0[k] = min(c0[k], c0[a])
+                c1[k] = max(c1[k], c1[a])
+                touch[k] = touch[k] or touch[a]
+        ext = max(r1[k] - r0[k] + 1, c1[k] - c0[k] + 1)
+        if ext > min_ring or (touch[k] and ext > min_stub):
+            big[k] = v
+    # Levels from the last set added back to the first: a set's parent was added after it.
+    out = np.zeros((h, w), np.float32)
+    level = np.zeros(m, np.float32)
+    for k in range(m - 1, -1, -1):
+        if big[k] >= 0:
+            lv = big[k]
+        elif up[k] < 0:
+            lv = np.float32(0.0)
+        else:
+            lv = min(at[k], level[up[k]])
+        level[k] = lv
+        p = order[k]
+        pr, pc = p // w, p % w
+        out[pr, pc] = min(lv, ink[pr, pc])
+    return out

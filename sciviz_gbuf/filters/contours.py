@@ -183,11 +183,14 @@ def contour_lines(
         a local plane over the valid cells, so nodata holes and the grid edge bend no line.
         Line widths and the crowding fade (Eq. 15) follow the gradient of that fit at least
         1 px wide, so noise does not make minors flicker into dashes. (2) Rings and specks
-        whose 8-connected ink (any ink > 0) fits in ``min_ring`` px are removed (line ends that
-        touch nodata or the grid's edge are not rings: they stay unless they fit in
-        ``min_ring / 3`` px, one line width); ink is joined
-        at that low threshold (hysteresis), so a line that fades where the level is noisy
-        stays one line and is not cut into dashes. On steep ground
+        whose 8-connected ink fits in ``min_ring`` px are removed at every ink level (line
+        ends that touch nodata or the grid's edge are not rings: they stay unless they fit in
+        ``min_ring / 3`` px, one line width): each pixel keeps its ink only up to the highest
+        level ``T`` at which its component of ``ink >= T`` is larger (an attribute opening).
+        At the lowest ink that is hysteresis, so a line that fades where the level is noisy
+        or where minors crowd (Eq. 15) stays one line; at the higher levels its short darker
+        stretches are lowered to the ink of the piece, so no threshold shows it as dashes,
+        and specks go whatever their ink. On steep ground
         (lines <= 4 px apart) the lines move < 0.25 px; they stay within 1 px of
         ``gdal_contour``'s where lines are at most 8 px apart (tested).
     min_ring : float >= 0, optional

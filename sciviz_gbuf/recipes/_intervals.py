@@ -11,6 +11,7 @@ import numpy as np
 __all__ = [
     "choose_intervals",
     "contour_intervals",
+    "median_ground_slope",
     "median_slope",
     "nice_intervals",
     "round_up",
@@ -72,6 +73,17 @@ def slope_lattice(z, samples: int = 1_000_000) -> tuple | None:
 def median_slope(base: np.ndarray, east: np.ndarray, south: np.ndarray) -> float:
     """:func:`typical_slope` of the lattice cells of :func:`slope_lattice`."""
     g = np.hypot(east - base, south - base)
+    g = g[np.isfinite(g) & (g > 0)]
+    return float(np.median(g)) if g.size else float("nan")
+
+
+def median_ground_slope(
+    base: np.ndarray, east: np.ndarray, south: np.ndarray, dx: float, dy: float
+) -> float:
+    """The median ground slope, rise over run (dimensionless), of the lattice cells of
+    :func:`slope_lattice` on cells ``dx`` by ``dy`` in the heights' units (metres: a DEM's
+    ``pixel_size``), where not flat (like :func:`median_slope`); NaN without such a cell."""
+    g = np.hypot((east - base) / np.float64(dx), (south - base) / np.float64(dy))
     g = g[np.isfinite(g) & (g > 0)]
     return float(np.median(g)) if g.size else float("nan")
 

@@ -22,13 +22,16 @@ from ..filters import sky_view as sky_view_factor
 from ..filters.bands import band_tables
 from ..filters.contours import contour_halo
 from ..readers import DEM, read_dem
-from ._intervals import contour_intervals
+from ._intervals import contour_intervals, median_ground_slope, slope_lattice
 
 __all__ = [
     "CONTOUR_COLOR",
+    "RELIEF_SLOPE",
+    "RELIEF_Z_MAX",
     "as_dem",
     "check_bands",
     "check_line_sizes",
+    "check_z_factor",
     "composite",
     "flat_shade",
     "lazy_dem",
@@ -38,6 +41,7 @@ __all__ = [
     "map_contours",
     "map_layers",
     "relief_light",
+    "relief_z_factor",
     "rgba",
 ]
 
@@ -55,6 +59,32 @@ def as_dem(dem: DEM | str | os.PathLike | np.ndarray) -> DEM:
     if _dask.is_dask(dem):
         return lazy_dem(dem)
     return read_dem(dem)
+
+
+#: Median ground slope (degrees) that the automatic z factor of a map's relief lifts a
+#: low-relief DEM to: that of hilly ground, whose relief shade reads at z = 1.
+RELIEF_SLOPE = 10.0
+#: The largest automatic z factor (a plain's relief is exaggerated at most this much).
+RELIEF_Z_MAX = 20.0
+
+
+def relief_z_factor(z_factor: float | None, ground_slope: float) -> float:
+    """The z factor of a map's relief: ``z_factor`` when given (as it is), else the automatic
+    ``clip(tan(RELIEF_SLOPE) / ground_slope, 1, RELIEF_Z_MAX)`` for the median ground slope
+    ``ground_slope`` (rise over run, :func:`~._intervals.median_ground_slope`): ground whose
+    median slope is below 10 degrees is exaggerated until it reaches 10 degrees (at most 20
+    times), steeper ground keeps z = 1; 1 without a slope (flat or no valid cell)."""
+    if z_factor is not None:
+        return z_factor
+    if not (math.isfinite(ground_slope) and ground_slope > 0):
+        return 1.0
+    target = math.tan(math.radians(RELIEF_SLOPE))
+    return float(min(max(target / ground_slope, 1.0), RELIEF_Z_MAX))
+
+
+def check_z_factor(z_factor) -> float | None:
+    """``z_factor``: None (automatic, :func:`relief_z_factor`) or a finite number."""
+    return None if z_factor is None else _validate.finite(z_factor, "z_factor")
 
 
 def relief_light(direct: np.ndarray, ambient: np.ndarray | float = 1.0) -> np.ndarray:
@@ -138,7 +168,7 @@ def map_layers(
     relief: bool,
     azimuth: float,
     altitude: float,
-    z_factor: float,
+    z_factor: float | None,
     variant: str,
     shadows: bool,
     sky_view: bool,
@@ -148,7 +178,9 @@ def map_layers(
 ) -> dict[str, np.ndarray | None]:
     """The layers of a plan-view map, see :func:`topographic_map`: ``ink`` (contours or None),
     ``sh`` (hillshade), ``flat`` (its value on flat ground), ``lit`` (cast shadows), ``sky``
-    (sky view) when asked for, and ``tables`` (the band colours' kernel arguments, or None).
+    (sky view) when asked for, ``tables`` (the band colours' kernel arguments, or None) and
+    ``z_factor`` (that of the relief: ``z_factor``, or None for :func:`relief_z_factor` of the
+    median ground slope on the cells ``dx`` by ``dy`` of :func:`~._intervals.slope_lattice`).
     Every option is checked before the work starts."""
     z = heights
     lo, hi, interval, major_interval = contour_intervals(z, interval, major_interval)
@@ -170,6 +202,11 @@ def map_layers(
     if bar is not None:
         bar.step("relief")
     if relief:
+        if z_factor is None:
+            lattice = slope_lattice(z)
+            slope = float("nan") if lattice is None else median_ground_slope(*lattice, dx, dy)
+            z_factor = relief_z_factor(None, slope)
+        layers["z_factor"] = z_factor
         opts = {"azimuth": azimuth, "altitude": altitude, "z_factor": z_factor, "variant": variant}
         layers["sh"] = hillshade(fill_nodata_ring(z), dx=dx, dy=dy, **opts)
         layers["flat"] = max(flat_shade(dx=dx, dy=dy, **opts), 1e-3)

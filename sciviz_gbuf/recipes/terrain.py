@@ -22,7 +22,14 @@ from .._progress import progress
 from ..errors import InputError
 from ..readers import DEM
 from ._intervals import contour_intervals, nice_intervals, typical_slope
-from ._map import CONTOUR_COLOR, as_dem, check_line_sizes, composite, map_layers
+from ._map import (
+    CONTOUR_COLOR,
+    as_dem,
+    check_line_sizes,
+    check_z_factor,
+    composite,
+    map_layers,
+)
 from ._resample import check_size_options, map_grid, resample_heights
 from .terrain_chunked import lazy_topographic_map
 
@@ -59,7 +66,7 @@ def topographic_map(
     relief: bool = True,
     azimuth: float = 315.0,
     altitude: float = 45.0,
-    z_factor: float = 1.0,
+    z_factor: float | None = None,
     variant: str = "regular",
     shadows: bool = False,
     sky_view: bool = False,
@@ -107,8 +114,16 @@ def topographic_map(
     relief : bool, default: True
         Multiply the colours by a relief shade, normalised to 1 on open flat ground; slopes
         facing the sun are lifted towards white.
-    azimuth, altitude, z_factor, variant
+    azimuth, altitude, variant
         Of the relief, as in :func:`~sciviz_gbuf.filters.hillshade` (GDAL's conventions).
+    z_factor : float, optional
+        Vertical exaggeration of the relief (and of ``shadows``/``sky_view``), GDAL's ``-z``.
+        Default: automatic, so that low-relief DEMs are not washed out:
+        ``clip(tan(10 deg) / m, 1, 20)`` for ``m`` the median ground slope (rise over run,
+        heights and pixel size in metres; flat cells left out, sampled as for the default
+        intervals). Ground whose median slope is under 10 degrees is exaggerated until it is
+        10 degrees (at most 20 times); steeper ground keeps ``z_factor=1``. A number is used
+        as it is (``z_factor=1`` is the true relief).
     shadows : bool, default: False
         Darken cells in the cast shadow of other terrain (rayshader's ``ray_shade``).
     sky_view : bool, default: False
@@ -158,6 +173,7 @@ def topographic_map(
     # before the DEM is read
     check_line_sizes(width=width, major_width=major_width, dense_spacing=dense_spacing)
     check_size_options(size, scale, dpi)
+    z_factor = check_z_factor(z_factor)
     d = as_dem(dem)
     if not _dask.is_dask(d.mask) and not d.mask.any():
         # A fully transparent picture would look like success.

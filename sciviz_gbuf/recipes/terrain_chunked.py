@@ -8,7 +8,9 @@ whose nodata ring is extrapolated: 1 + 2 cells), the sky view (its ray length in
 colour bands and the composite (the cell itself). What needs the whole grid comes first, in
 one reduction pass over the heights: the height range (colour map ends, default contour
 intervals) and the median slope on :func:`~.terrain.slope_lattice` (default contour
-intervals). Giving ``interval``/``major_interval`` and ``vmin``/``vmax`` skips that pass.
+intervals; with ``z_factor=None`` also the median ground slope, the relief's automatic z
+factor). Giving ``interval``/``major_interval``, ``vmin``/``vmax`` and a ``z_factor`` (or
+``relief=False``) skips that pass.
 Cast shadows reach across the whole grid and are refused.
 """
 
@@ -24,8 +26,15 @@ from ..filters.hillshade import FILL_RING_RADIUS
 from ..filters.hillshade import RADIUS as HILLSHADE_RADIUS
 from ..filters.terrain_light import sky_view_reach
 from ..readers import DEM
-from ._intervals import choose_intervals, median_slope, slope_lattice
-from ._map import composite, flat_shade, map_band_tables, map_contour_halo, map_contours
+from ._intervals import choose_intervals, median_ground_slope, median_slope, slope_lattice
+from ._map import (
+    composite,
+    flat_shade,
+    map_band_tables,
+    map_contour_halo,
+    map_contours,
+    relief_z_factor,
+)
 
 __all__ = ["RELIEF_HALO", "lazy_topographic_map"]
 
@@ -34,16 +43,21 @@ __all__ = ["RELIEF_HALO", "lazy_topographic_map"]
 RELIEF_HALO = HILLSHADE_RADIUS + FILL_RING_RADIUS
 
 
-def _statistics(z, interval, major_interval, vmin, vmax, name: str = "heights"):
-    """Height range and contour intervals, from one reduction pass when they are not given."""
+def _statistics(
+    z, interval, major_interval, vmin, vmax, name: str = "heights", ground=None
+) -> tuple[float, float, float, float | None, float]:
+    """Height range, contour intervals and, with ``ground = (dx, dy)``, the median ground slope
+    (NaN without), from one reduction pass when they are not given: the same lattice cells,
+    and so the same numbers, as the in-memory map."""
     import dask.array as da
 
     need_range = vmin is None or vmax is None or (interval is None and major_interval is None)
     need_slope = interval is None and major_interval is None
     lo = hi = float("nan")
     slope = None
-    if need_range:
-        lattice = slope_lattice(z) if need_slope else None
+    ground_slope = float("nan")
+    lattice = slope_lattice(z) if need_slope or ground is not None else None
+    if need_range or lattice is not None:
         lo, hi, *cells = _chunks.reduce(
             da.nanmin(z), da.nanmax(z), *(lattice if lattice is not None else ())
         )
@@ -52,8 +66,10 @@ def _statistics(z, interval, major_interval, vmin, vmax, name: str = "heights"):
             raise InputError(f"{name}: every cell is nodata: nothing to map")
         if need_slope:
             slope = median_slope(*cells) if cells else float("nan")
+        if ground is not None and cells:
+            ground_slope = median_ground_slope(*cells, *ground)
     lo, hi, interval, major_interval = choose_intervals(lo, hi, slope, interval, major_interval)
-    return lo, hi, interval, major_interval
+    return lo, hi, interval, major_interval, ground_slope
 
 
 def _relief_block(heights: np.ndarray, **opts) -> np.ndarray:
@@ -79,7 +95,7 @@ def lazy_topographic_map(
     relief: bool,
     azimuth: float,
     altitude: float,
-    z_factor: float,
+    z_factor: float | None,
     variant: str,
     shadows: bool,
     sky_view: bool,
@@ -97,9 +113,13 @@ def lazy_topographic_map(
         )
     z = d.heights
     dx, dy = d.pixel_size
-    lo, hi, interval, major_interval = _statistics(
-        z, interval, major_interval, vmin, vmax, d.source or "heights"
-    )
+    auto_z = relief and z_factor is None
+    lo, hi, interval, major_interval, ground_slope = _statistics(
+        z, interval, major_interval, vmin, vmax, d.source or "heights",
+        ground=(dx, dy) if auto_z else None,
+    )  # fmt: skip
+    if relief:
+        z_factor = relief_z_factor(z_factor, ground_slope)
     tables = map_band_tables(
         bands, interval, major_interval, cmap, lo if vmin is None else vmin,
         hi if vmax is None else vmax, sea_level,

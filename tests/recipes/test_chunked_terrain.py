@@ -309,14 +309,16 @@ def test_graph_is_lazy_and_global_pass_only_when_needed(rough):
     z = da.from_array(rough, chunks=ODD).map_blocks(
         source, dtype=np.float32, meta=np.empty((0, 0), np.float32)
     )
-    lazy = topographic_map(z, interval=5.0, major_interval=25.0, vmin=0.0, vmax=400.0)
+    given = {"interval": 5.0, "major_interval": 25.0, "vmin": 0.0, "vmax": 400.0}
+    lazy = topographic_map(z, **given, z_factor=1.0)
     assert calls == [], "all parameters given: building the map must not read the heights"
     lazy.compute()
     assert calls
-    calls.clear()
-    topographic_map(z)  # default range and intervals: one reduction pass, nothing more
     n_chunks = z.numblocks[0] * z.numblocks[1]
-    assert len(calls) == n_chunks
+    for kwargs in ({}, given):  # default range, intervals or z factor: one pass, nothing more
+        calls.clear()
+        topographic_map(z, **kwargs)
+        assert len(calls) == n_chunks
 
 
 def test_bad_parameters_raise_before_any_computation(rough):

@@ -1,0 +1,138 @@
+"""The generalisation's removal of small rings and specks (``contour_lines(generalize=True)``):
+an attribute opening of the ink, so no threshold of the ink shows specks or short dashes."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy import ndimage
+
+from sciviz_gbuf.filters import _contour_generalize, contour_lines
+
+EIGHT = np.ones((3, 3), bool)
+
+
+def opening_by_definition(ink, cut, min_ring, min_stub):
+    """Each pixel: ``min(ink, T)`` for the highest level ``T`` at which its component of
+    ``ink >= T`` is large, level by level with ``ndimage.label`` (the definition, slowly)."""
+    out = np.zeros_like(ink)
+    done = np.zeros(ink.shape, bool)
+    for level in np.unique(ink[ink > 0])[::-1]:
+        labels, _ = ndimage.label(ink >= level, EIGHT)
+        for k, box in enumerate(ndimage.find_objects(labels), 1):
+            extent = max(box[0].stop - box[0].start, box[1].stop - box[1].start)
+            here = labels == k
+            if extent > min_ring or (cut[here].any() and extent > min_stub):
+                new = here & ~done
+                out[new] = np.minimum(ink[new], level)
+                done |= here
+    return out
+
+
+def test_opening_is_its_definition():
+    rng = np.random.default_rng(5)
+    for _ in range(150):
+        h, w = rng.integers(2, 16, 2)
+        ink = np.round(rng.random((h, w)) * (rng.random((h, w)) < 0.55) * 4) / 4  # ties
+        ink = ink.astype(np.float32)
+        cut = rng.random((h, w)) < 0.1
+        ring, stub = float(rng.integers(0, 7)), float(rng.integers(0, 3))
+        got = _contour_generalize.ring_opening(ink, cut, ring, stub)
+        assert np.array_equal(got, opening_by_definition(ink, cut, ring, stub)), (ink, cut)
+
+
+def small_components(ink: np.ndarray, threshold: float, largest: int = 6) -> int:
+    """Components of ``ink > threshold`` of at most ``largest`` px away from the grid's edge."""
+    labels, n = ndimage.label(ink > threshold, EIGHT)
+    if n == 0:
+        return 0
+    sizes = np.bincount(labels.ravel())[1:]
+    edge = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
+    inner = np.ones(n, bool)
+    inner[edge[edge > 0] - 1] = False
+    return int(np.sum((sizes <= largest) & inner))
+
+
+def crowded_minors(seed: int = 2) -> np.ndarray:
+    """A slope whose lines (interval 1) lie 3-4.5 px apart with a little noise: minors fade
+    in and out where they crowd (Eq. 15, dense spacing 4 px)."""
+    rng = np.random.default_rng(seed)
+    y, x = np.mgrid[0:120, 0:160].astype(np.float64)
+    slope = 1.0 / (3.75 + 0.75 * np.sin(x / 17.0) * np.cos(y / 23.0))  # height per px
+    z = np.cumsum(slope, axis=1) + 0.3 * np.sin(y / 9.0)
+    z += ndimage.gaussian_filter(rng.standard_normal(z.shape), 1.5) * 0.1
+    return z.astype(np.float32)
+
+
+OPTIONS = {"interval": 1.0, "major_interval": 5.0, "width": 1.0, "major_width": 2.0,
+           "dense_spacing": 4.0}  # fmt: skip
+
+
+def test_fading_minors_show_no_dashes_at_any_threshold():
+    """Where the minors fade they are faint along whole pieces: at no ink threshold do short
+    isolated pieces appear; the same lines without the opening (only the hysteresis at the
+    lowest ink) show many at the visible thresholds (the measure can fail)."""
+    z = crowded_minors()
+    ink = contour_lines(z, **OPTIONS, generalize=True)
+    thresholds = (0.05, 0.1, 0.2, 0.3, 0.5, 0.7, 0.9)
+    assert max(small_components(ink, t) for t in thresholds) == 0
+    assert ((ink > 0.05) & (ink < 0.9)).mean() > 0.05  # lines do fade here
+    # hysteresis at the lowest ink only (what the opening does at T -> 0)
+    raw = contour_lines(z, **OPTIONS, generalize=True, min_ring=0.0)
+    labels, _ = ndimage.label(raw > 0, EIGHT)
+    boxes = ndimage.find_objects(labels)
+    small = np.array([False] + [max(b[0].stop - b[0].start, b[1].stop - b[1].start) <= 6
+                                for b in boxes])  # fmt: skip
+    hysteresis = np.where(small[labels], 0.0, raw)
+    assert sum(small_components(hysteresis, t) for t in (0.2, 0.3, 0.5)) > 10
+
+
+def test_majors_are_untouched_and_lines_keep_their_ink():
+    """Lines longer than the ring size keep their ink: the majors exactly (never faded, one
+    long component at each of their levels), and the ink the opening takes is a small part."""
+    z = crowded_minors()
+    ink = contour_lines(z, **OPTIONS, generalize=True)
+    raw = contour_lines(z, **OPTIONS, generalize=True, min_ring=0.0)
+    assert (ink <= raw).all()  # an opening only lowers
+    majors = contour_lines(z, interval=5.0, width=2.0, generalize=True, min_ring=0.0)
+    on_major = majors >= 0.999
+    assert on_major.sum() > 500
+    assert np.array_equal(ink[on_major], raw[on_major])
+    assert ink.sum() > 0.9 * raw.sum()
+
+
+def test_strips_give_the_same_pixels(monkeypatch):
+    z = crowded_minors(seed=3)
+    whole = contour_lines(z, **OPTIONS, generalize=True)
+    monkeypatch.setattr(_contour_generalize, "STRIP_ROWS", 9)
+    assert np.array_equal(contour_lines(z, **OPTIONS, generalize=True), whole)
+
+
+@pytest.mark.parametrize("min_ring", [0.0, 3.0, 12.0])
+def test_rings_up_to_min_ring_go_whatever_their_ink(min_ring):
+    """Rings of a bump field: every ring whose box is at most ``min_ring`` px goes, at any
+    ink; larger ones keep their ink."""
+    y, x = np.mgrid[0:90, 0:90].astype(np.float32)
+    z = np.zeros_like(x)
+    for cy, cx, r in ((20, 20, 1.5), (20, 60, 3.0), (60, 25, 6.0), (62, 65, 12.0)):
+        z += np.maximum(0.0, r - np.hypot(x - cx, y - cy)).astype(np.float32)
+    ink = contour_lines(z, interval=1.0, width=1.0, generalize=True, min_ring=min_ring)
+    raw = contour_lines(z, interval=1.0, width=1.0, generalize=True, min_ring=0.0)
+    labels, _ = ndimage.label(raw > 0, EIGHT)
+    for k, box in enumerate(ndimage.find_objects(labels), 1):
+        extent = max(box[0].stop - box[0].start, box[1].stop - box[1].start)
+        here = labels == k
+        if extent <= min_ring:
+            assert ink[here].max() == 0.0, extent
+        else:
+            assert ink[here].max() > 0.5, extent
+
+
+def test_chunked_lines_are_the_same_pixels():
+    """The opening is decided within ``min_ring`` cells of a pixel: chunk by chunk with the
+    halo of :func:`~sciviz_gbuf.filters.contours.contour_halo`, the same pixels."""
+    da = pytest.importorskip("dask.array")
+    z = crowded_minors(seed=4)
+    whole = contour_lines(z, **OPTIONS, generalize=True)
+    lazy = contour_lines(da.from_array(z, chunks=(17, 29)), **OPTIONS, generalize=True)
+    assert np.array_equal(lazy.compute(), whole)
