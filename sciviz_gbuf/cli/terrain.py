@@ -475,8 +475,9 @@ def add_topo(sub) -> None:
     p.add_argument(
         "--z-factor",
         type=number(lambda v: v > 0, "a number > 0"),
-        default=1.0,
-        help="vertical exaggeration of the relief (GDAL's -z)",
+        default=None,
+        help="vertical exaggeration of the relief (GDAL's -z; default: automatic, 1 on "
+        "ground steeper than 10 degrees, up to 20 on low-relief ground)",
     )
     p.add_argument(
         "--variant",
