@@ -139,9 +139,10 @@ def ct_surface(
     *,
     iso: str | float = "bone",
     scalars: str | None = None,
-    smooth: int = 15,
+    smooth: int = 60,
     decimate: float = 0.0,
     largest: bool = False,
+    refine: bool = True,
     series_uid: str | None = None,
     resample: bool = False,
     progress_bar: bool = False,
@@ -149,7 +150,10 @@ def ct_surface(
     """The isosurface of a DICOM folder / file list or of a volume; a surface passes through.
 
     ``series_uid`` and ``resample`` go to :func:`~sciviz_gbuf.readers.read_dicom_series`; the
-    other options to :func:`~sciviz_gbuf.core.isosurface`.
+    other options to :func:`~sciviz_gbuf.core.isosurface`. ``refine`` (default True) resamples
+    thick slices by cubic convolution before the surface is cut, so a bone surface seen along
+    the slices has no terrace (and no crease or speck of ink) at every slice; ``smooth`` is the
+    windowed-sinc smoothing after it (0 with ``refine=False``: the raw marching-cubes surface).
     """
     if isinstance(source, pv.PolyData) and source.n_cells > 0 and source.n_lines == 0:
         return source
@@ -171,6 +175,7 @@ def ct_surface(
         smooth=smooth,
         decimate=decimate,
         largest=largest,
+        refine=refine,
         progress_bar=progress_bar,
     )
 
@@ -416,7 +421,8 @@ def ct_enhance(
     background: Sequence[float] | None = None,
     series_uid: str | None = None,
     resample: bool = False,
-    smooth: int = 15,
+    smooth: int = 60,
+    refine: bool = True,
     progress_bar: bool = False,
 ) -> np.ndarray:
     """The enhanced CT image of Saito & Takahashi 1990 Fig. 14 (b), beside the conventional (a).
@@ -441,8 +447,9 @@ def ct_enhance(
     contour_color : RGB, default: :data:`CT_CONTOUR_COLOR` (dark sepia)
     background : RGB, optional
         Opaque background; default transparent.
-    series_uid, resample, smooth
-        Reading and surface options (:func:`ct_surface`).
+    series_uid, resample, smooth, refine
+        Reading and surface options (:func:`ct_surface`): ``refine=False, smooth=0`` draws the
+        raw marching-cubes surface, slice terraces and all.
     progress_bar : bool, default: False
 
     Returns
@@ -470,6 +477,7 @@ def ct_enhance(
             "series_uid": series_uid,
             "resample": resample,
             "smooth": smooth,
+            "refine": refine,
             "progress_bar": progress_bar,
         }
     )
