@@ -249,6 +249,14 @@ def split_normals(
     face, area2 = _face_normals(poly.points, triangles)
     cos_limit = np.cos(np.radians(feature_angle))
     unit = normals / np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-300)
+    # Cheap exit first (smooth surfaces, e.g. isosurfaces, are millions of triangles): if
+    # every corner's normal lies within half the feature angle of its face, two faces that
+    # share a point are within the feature angle of each other (the angles add), so no corner
+    # is shared across a sharp edge and none disagrees: nothing to split.
+    flat_tri = np.repeat(np.arange(triangles.shape[0]), 3)
+    corner_cos = np.abs(np.einsum("ij,ij->i", unit[triangles.ravel()], face[flat_tri]))
+    if np.all((corner_cos >= np.cos(np.radians(feature_angle / 2.0))) | (area2[flat_tri] <= 0)):
+        return poly, normals, triangles
     # Triangles around each point (CSR), then every (corner, triangle around its point) pair.
     flat = triangles.ravel()
     order = np.argsort(flat, kind="stable")
@@ -394,6 +402,10 @@ def _make_surface(
         normals = _existing_normals(poly)
         tris = poly.GetPolys()
         conn = np.asarray(pv.convert_array(tris.GetConnectivityArray()), dtype=np.int64)
+        triangles = conn.reshape(-1, 3)
+    elif "isosurface" in poly.field_data:
+        # Our own isosurface: its normals are the smoothed surface's, better than the faces'
+        # of marching cubes (splitting them would facet an organic surface), and smooth.
         triangles = conn.reshape(-1, 3)
     else:
         # The file's normals may be smoothed across the edges the feature angle calls sharp.
