@@ -6,7 +6,7 @@ Run from the project root with the project's venv active::
     python benchmarks/bench_ct.py --series DIR --size 512
 
 Ours (``sciviz_gbuf``): ``read_dicom_series`` (headers, order by position, per-slice rescale,
-geometry checks) -> ``isosurface`` (flying edges at 300 HU + 15 windowed-sinc iterations + normals)
+geometry checks) -> ``isosurface`` (flying edges at 300 HU + 60 windowed-sinc iterations + normals)
 -> ``capture`` (1024^2, supersample 2) -> ``ct_enhance`` (profiles, shading, contours, bands) ->
 PNG. Peer, same run: what a PyVista user writes by hand: ``pydicom.dcmread`` every file, sort by
 ImagePositionPatient z, stack and rescale into a ``pyvista.ImageData``, ``contour(method=

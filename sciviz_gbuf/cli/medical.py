@@ -74,6 +74,7 @@ def _cmd_ct(args: argparse.Namespace) -> int:
         window_size=args.size,
         supersample=args.supersample,
         smooth=args.smooth,
+        refine=args.refine,
         largest=args.largest,
         progress_bar=show,
         up=args.up,
@@ -142,7 +143,14 @@ def add_ct(sub) -> None:
         "positions)",
     )
     p.add_argument(
-        "--smooth", type=int, default=15, metavar="N", help="surface smoothing iterations"
+        "--smooth", type=int, default=60, metavar="N", help="surface smoothing iterations"
+    )
+    p.add_argument(
+        "--no-refine",
+        dest="refine",
+        action="store_false",
+        help="cut the surface from the slices as they are (by default an axis of slices "
+        "more than twice as far apart as the pixels is resampled first: no terraces)",
     )
     p.add_argument("--largest", action="store_true", help="keep the largest surface piece only")
     p.add_argument("--contour-axis", choices=["x", "y", "z"], default=None)
