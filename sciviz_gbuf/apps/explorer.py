@@ -26,16 +26,24 @@ import pyvista as pv
 from .._validate import LIMITS, at_most, number_in
 from ..compose import to_uint8
 from ..core.capture import capture
+from ..core.framing import check_up, default_up
 from ..core.gbuffer import GBuffer
 from ..datasets import load_nut
 from ..errors import InputError
-from ..filters import color_bands, contour_lines, crease_edges, edge_map, profile_edges
+from ..filters import color_bands, contour_lines, edge_map
 from ..readers import DEM, kind_of, read_dem, read_scene, suffixes
 from ..recipes.medical import ct_surface
 from ..recipes.terrain import CONTOUR_COLOR, composite, contour_intervals, map_layers
 from ..styles import check_style, gooch, hatch, styles_for, toon
-from ..styles.fused import fused_style, rgba_on_paper
-from ..styles.illustration import fig7_edge_map, illustrate
+from ..styles.fused import FUSED_CONSTANTS, fused_style, rgba_on_paper
+from ..styles.illustration import (
+    fig7_edge_map,
+    illustrate,
+    is_dark,
+    line_ink,
+    profile_ink,
+    thin_edge_map,
+)
 
 __all__ = [
     "CAMERA_BOUNDS",
@@ -124,8 +132,9 @@ class Params:
     crease_angle, depth_jump, width : float
         Edge thresholds (degrees, pixel footprints) and line width (output pixels).
     contour_interval, contour_width : float
-        Contour lines of the height (world z) every ``contour_interval`` data units (0: none),
-        ``contour_width`` pixels wide.
+        Contour lines of the height (the world coordinate along the explorer's up axis, z by
+        default) every ``contour_interval`` data units (0: none), ``contour_width`` pixels
+        wide.
     bands : int
         Number of colour bands over the visible height range (0: none).
     light_azimuth, light_elevation : float
@@ -285,6 +294,11 @@ class Explorer:
     dem : DEM, optional
         The DEM grid itself (``kind="dem"``): enables the plan-view map (``view="map"``, then
         the default) on its grid, decimated to at most about 2048 cells a side.
+    up : {"x", "y", "z"}, optional
+        The world axis upright in the picture: the orbit camera turns around it (azimuth) and
+        rises towards it (elevation), and heights (contours, bands) are measured along it.
+        Default: the convention of the file the scene was read from
+        (:func:`~sciviz_gbuf.core.framing.default_up`: y for OFF/OBJ/PLY/glTF, z otherwise).
 
     Attributes
     ----------
@@ -309,6 +323,7 @@ class Explorer:
     kind: str = "mesh"
     params: Params | None = None
     dem: DEM | None = None
+    up: str | None = None
     captures: int = 0
     last_ms: float = 0.0
     layer_runs: dict = field(default_factory=dict)
@@ -322,6 +337,8 @@ class Explorer:
         self.window_size = (w, h)
         if not isinstance(self.scene, pv.DataSet) or self.scene.n_points == 0:
             raise InputError("scene: expected a non-empty PyVista dataset")
+        self.up = default_up(self.scene) if self.up is None else check_up(self.up)
+        self._up = "xyz".index(self.up)
         b = np.asarray(self.scene.bounds, dtype=np.float64).reshape(3, 2)
         self._centre = b.mean(axis=1)
         self._radius = max(float(np.linalg.norm(b[:, 1] - b[:, 0])) / 2.0, 1e-9)
@@ -380,25 +397,43 @@ class Explorer:
 
     @classmethod
     def from_file(
-        cls, path: str | os.PathLike | None, *, window_size: Sequence[int] = (1024, 768)
+        cls,
+        path: str | os.PathLike | None,
+        *,
+        window_size: Sequence[int] = (1024, 768),
+        up: str | None = None,
     ) -> Explorer:
-        """An explorer of a mesh file, DEM or DICOM folder (see :func:`load_scene`)."""
+        """An explorer of a mesh file, DEM or DICOM folder (see :func:`load_scene`); ``up``:
+        the upright world axis, default by the file's convention (``--up``)."""
+        up = None if up is None else check_up(up)  # before the (slow) read
         p = None if path is None else Path(path)
         if p is not None and p.is_file() and kind_of(p) == "dem":
             dem = read_dem(p)
-            return cls(_dem_surface(dem), window_size=tuple(window_size), kind="dem", dem=dem)
+            return cls(
+                _dem_surface(dem), window_size=tuple(window_size), kind="dem", dem=dem, up=up
+            )
         scene, kind = load_scene(path)
-        return cls(scene, window_size=tuple(window_size), kind=kind)
+        if up is None and p is not None and p.is_file():
+            up = default_up(p)  # the convention of the file's format, whatever read it
+        return cls(scene, window_size=tuple(window_size), kind=kind, up=up)
 
     def camera_tuple(self) -> tuple[tuple[float, ...], tuple[float, ...], tuple[float, ...]]:
-        """``(position, focal_point, view_up)`` of the orbit camera (z up, 30° view angle)."""
+        """``(position, focal_point, view_up)`` of the orbit camera (30° view angle).
+
+        The orbit is around the up axis ``u`` (:attr:`up`): with the right-handed frame
+        ``(e1, e2, u)`` of the cyclically next axes (z up: x, y; y up: z, x; x up: y, z) the
+        eye is in direction ``cos(el) (cos(az) e1 + sin(az) e2) + sin(el) u`` from the centre,
+        and ``u`` is upright in the picture (``e2`` when looking straight along it).
+        """
         az, el = math.radians(self.camera.azimuth), math.radians(self.camera.elevation)
-        d = np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
+        axes = np.eye(3)
+        e1, e2, u = (axes[(self._up + k) % 3] for k in (1, 2, 0))
+        d = math.cos(el) * (math.cos(az) * e1 + math.sin(az) * e2) + math.sin(el) * u
         # The whole bounding sphere fits the 30° view angle at zoom 1.
         dist = self._radius / math.sin(math.radians(15.0)) / self.camera.zoom
-        up = (0.0, 0.0, 1.0) if abs(self.camera.elevation) < 89.0 else (0.0, 1.0, 0.0)
+        view_up = u if abs(self.camera.elevation) < 89.0 else e2
         pos = self._centre + dist * d
-        return tuple(pos.tolist()), tuple(self._centre.tolist()), up
+        return tuple(pos.tolist()), tuple(self._centre.tolist()), tuple(view_up.tolist())
 
     def _layer(self, key: tuple, make, cache: dict | None = None) -> np.ndarray:
         """A filter result of the cached G-buffer, computed once per parameter ``key``: a slider
@@ -420,36 +455,43 @@ class Explorer:
         re-runs only that pass."""
         gb = self.gbuffer
         if gb.supersample != 1 or gb.normal.dtype != np.float32:
-            return style_image(gb, p, height_range=self.height_range)  # not the explorer's own
+            # not the explorer's own
+            return style_image(gb, p, height_range=self.height_range, up=self.up)
         edges = {"crease_angle": p.crease_angle, "depth_jump": p.depth_jump, "width": p.width}
         ekey = tuple(edges.values())
         empty2, empty3 = np.zeros((0, 0), np.float32), np.zeros((0, 0, 0), np.float32)
         layer, emap = empty2, empty3
         if p.style in ("enhance", "gooch", "toon"):
-            emap = self._layer(("emap", *ekey), lambda: edge_map(gb, **edges))
+            # One edge map for the three styles; its dark lines thinned where they clump, as
+            # the style functions do: the profiles only (white inner edges), or with the inner
+            # edges where the style draws them dark (toon). The thinning is cached apart, so a
+            # style change never recomputes the edge map itself.
+            raw = self._layer(("emap", *ekey), lambda: edge_map(gb, **edges))
+            inner = FUSED_CONSTANTS["edge_colors"][p.style][0]
+            dark = is_dark(inner)
+            emap = self._layer(
+                ("emap_thin", dark, *ekey),
+                lambda: thin_edge_map(raw, p.width, inner_color=inner),
+            )
         elif p.style == "fig7":
             emap = self._layer(("fig7", *ekey), lambda: fig7_edge_map(gb, **edges))
         elif p.style == "lines":
-            layer = self._layer(
-                ("lines", *ekey),
-                lambda: np.maximum(
-                    profile_edges(gb, depth_jump=p.depth_jump, width=p.width),
-                    crease_edges(gb, **edges),
-                ),
-            )
+            layer = self._layer(("lines", *ekey), lambda: line_ink(gb, **edges))
         else:
-            layer = self._layer(("hatch", p.width), lambda: profile_edges(gb, width=p.width))
+            layer = self._layer(("hatch", p.width), lambda: profile_ink(gb, width=p.width))
         lo, hi = self.height_range
         tint = empty3
         if p.bands > 0:
             # The kernel applies the tint on the surface only: no white-paper copy here.
-            tint = self._layer(("bands", p.bands), lambda: _band_rgba(gb, p.bands, lo, hi))
+            tint = self._layer(
+                ("bands", p.bands), lambda: _band_rgba(gb, p.bands, lo, hi, self._up)
+            )
         ink = empty2
         if p.contour_interval > 0:
             ink = self._layer(
                 ("contours", p.contour_interval, p.contour_width),
                 lambda: contour_lines(
-                    gb.world[..., 2],
+                    gb.world[..., self._up],
                     interval=p.contour_interval,
                     width=p.contour_width,
                     mask=gb.mask,
@@ -526,7 +568,7 @@ class Explorer:
         self._gbuffer = gb
         self.captures += 1
         self._layers = {}
-        z = gb.world[..., 2][gb.mask]
+        z = gb.world[..., self._up][gb.mask]
         self.height_range = (float(z.min()), float(z.max())) if z.size else (0.0, 1.0)
 
     def set_camera(
@@ -535,8 +577,8 @@ class Explorer:
         elevation: float | None = None,
         zoom: float | None = None,
     ) -> None:
-        """Move the orbit camera (degrees around z, degrees above the xy plane, zoom factor)
-        and capture again."""
+        """Move the orbit camera (degrees around the up axis, degrees above the plane across
+        it, zoom factor) and capture again."""
         new = replace(self.camera)
         # Bounded like every parameter the browser can set (CAMERA_BOUNDS): an extreme zoom
         # puts the camera at a distance no float32 depth buffer resolves.
@@ -622,41 +664,50 @@ def _style_rgb(gb: GBuffer, p: Params) -> np.ndarray:
     return np.asarray(rgb, dtype=np.float32)[..., :3]
 
 
-def _band_rgba(gb: GBuffer, bands: int, lo: float, hi: float) -> np.ndarray:
-    """Colour bands of world z at the buffer size (RGBA, only valid on the surface)."""
+def _band_rgba(gb: GBuffer, bands: int, lo: float, hi: float, axis: int = 2) -> np.ndarray:
+    """Colour bands of the height (world coordinate ``axis``) at the buffer size (RGBA, only
+    valid on the surface)."""
     step = max(hi - lo, 1e-12) / bands
-    return color_bands(gb.world[..., 2], interval=step, base=lo, vmin=lo, vmax=hi, mask=gb.mask)
+    height = gb.world[..., axis]
+    return color_bands(height, interval=step, base=lo, vmin=lo, vmax=hi, mask=gb.mask)
 
 
-def _band_tint(gb: GBuffer, bands: int, lo: float, hi: float) -> np.ndarray:
-    """Colour bands of world z as a multiplicative tint (white off the surface)."""
-    tint = _band_rgba(gb, bands, lo, hi)
+def _band_tint(gb: GBuffer, bands: int, lo: float, hi: float, axis: int = 2) -> np.ndarray:
+    """Colour bands of the height as a multiplicative tint (white off the surface)."""
+    tint = _band_rgba(gb, bands, lo, hi, axis)
     tint = np.where(gb.mask[..., None], tint[..., :3], np.float32(1.0))
     return gb.downsample(tint.astype(np.float32))
 
 
-def _contour_ink(gb: GBuffer, interval: float, width: float) -> np.ndarray:
-    """Contour-line ink of world z, (H, W, 1) at the output size."""
-    ink = contour_lines(gb.world[..., 2], interval=interval, width=width, mask=gb.mask)
+def _contour_ink(gb: GBuffer, interval: float, width: float, axis: int = 2) -> np.ndarray:
+    """Contour-line ink of the height (world coordinate ``axis``), (H, W, 1) at the output
+    size."""
+    ink = contour_lines(gb.world[..., axis], interval=interval, width=width, mask=gb.mask)
     return gb.downsample(ink)[..., None]
 
 
 def style_image(
-    gb: GBuffer, p: Params, *, height_range: tuple[float, float] | None = None
+    gb: GBuffer,
+    p: Params,
+    *,
+    height_range: tuple[float, float] | None = None,
+    up: str = "z",
 ) -> np.ndarray:
     """The picture of ``gb`` with parameters ``p``, straight from the package's functions: a
-    style, then optional colour bands and contour lines of world z (the reference that
-    :meth:`Explorer.render_image` reproduces with cached layers).
+    style, then optional colour bands and contour lines of the height, the world coordinate
+    along ``up`` (the reference that :meth:`Explorer.render_image` reproduces with cached
+    layers).
 
     Returns
     -------
     (H, W, 3) uint8 RGB.
     """
+    axis = "xyz".index(check_up(up))
     rgb = _style_rgb(gb, p)
     lo, hi = height_range if height_range is not None else (0.0, 1.0)
     if p.bands > 0:
-        rgb = rgb * _band_tint(gb, p.bands, lo, hi)
+        rgb = rgb * _band_tint(gb, p.bands, lo, hi, axis)
     if p.contour_interval > 0:
-        ink = _contour_ink(gb, p.contour_interval, p.contour_width)
+        ink = _contour_ink(gb, p.contour_interval, p.contour_width, axis)
         rgb = rgb * (1.0 - ink) + _CONTOUR_COLOR * ink
     return to_uint8(np.clip(rgb, 0.0, 1.0))

@@ -9,7 +9,7 @@ import sys
 from ..apps.explorer import Explorer
 from ..apps.explorer_web import check_port, is_loopback, new_secret, serve
 from ..errors import InputError
-from ._args import size
+from ._args import add_up, size
 
 __all__ = ["add_explore"]
 
@@ -47,7 +47,7 @@ def _cmd_explore(args: argparse.Namespace) -> int:
             file=sys.stderr,
             flush=True,
         )
-    explorer = Explorer.from_file(args.file, window_size=args.size)
+    explorer = Explorer.from_file(args.file, window_size=args.size, up=args.up)
     secret = new_secret()
     shown = "127.0.0.1" if host in ("0.0.0.0", "::", "[::]") else host
     shown = f"[{shown}]" if ":" in shown and not shown.startswith("[") else shown
@@ -67,6 +67,8 @@ def add_explore(sub) -> None:
         "filters on the cached G-buffer; moving the camera captures again. A DEM opens as a "
         "plan-view topographic map on its grid (relief light, z factor, contour interval, "
         "major lines, line width, colour bands), with a view selector for the 3-D height field. "
+        "The camera orbits around the up axis (--up; by default the file's convention, so "
+        "y-up PLY/OBJ/OFF/glTF models stand upright). "
         "Open the printed URL: it carries a secret made for this launch, without which the "
         "page cannot connect; other web pages (foreign Origin) cannot connect either.",
     )
@@ -86,4 +88,5 @@ def add_explore(sub) -> None:
         "loopback address: the explorer then answers other machines)",
     )
     p.add_argument("--size", type=size, default=(1024, 768), help="image size WxH")
+    add_up(p)  # the orbit camera turns around it; heights (contours, bands) run along it
     p.set_defaults(func=_cmd_explore)

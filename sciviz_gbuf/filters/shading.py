@@ -46,7 +46,9 @@ def lambert(
     except (TypeError, ValueError, OverflowError):
         lv = np.zeros(0)
     if lv.size != 3 or not np.isfinite(lv).all() or not np.linalg.norm(lv) > 0:
-        raise InputError(f"light: expected a finite non-zero 3-vector, got {light!r:.80}")
+        raise InputError(
+            f"light: expected a finite non-zero 3-vector, got {_validate.brief(light)}"
+        )
     ambient = _validate.unit_interval(ambient, "ambient")
     m = _validate.mask(mask, n.shape[:2])
     lv = (lv / np.linalg.norm(lv)).astype(np.float32)

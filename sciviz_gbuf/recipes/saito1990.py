@@ -208,7 +208,7 @@ def fig7_panels(
     inner = internal_edges(gb, **opts)
     prof = profile_edges(gb, depth_jump=depth_jump, width=width)
     for black_only, tag, label in ((False, "", "1"), (True, "2", "2")):
-        emap = edges_to_map(inner, prof, black_only=black_only)
+        emap = edges_to_map(inner, prof, black_only=black_only, width=width)
         prime = "'" if black_only else ""
         panels += [
             (f"c{tag}_edges", f"(c{prime}) edge image ({label})", enhance(grey, emap)),

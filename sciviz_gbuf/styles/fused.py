@@ -32,6 +32,7 @@ from .tone import (
     TOON_INNER_COLOR,
     TOON_LEVELS,
     TOON_PROFILE_COLOR,
+    toon_shades,
 )
 
 __all__ = ["FUSED_CONSTANTS", "FUSED_MODES", "fused_constants", "fused_style", "rgba_on_paper"]
@@ -47,10 +48,7 @@ def fused_constants() -> dict:
     base = np.asarray(GOOCH_BASE, f32)
     k_cool = np.asarray(GOOCH_COOL, f32) + f32(GOOCH_ALPHA) * base
     k_warm = np.asarray(GOOCH_WARM, f32) + f32(GOOCH_BETA) * base
-    levels = int(TOON_LEVELS)
-    table = (np.arange(1, levels + 1, dtype=np.float64) / levels)[:, None] * np.asarray(
-        TOON_BASE, np.float64
-    )[None, :]
+    table = toon_shades(TOON_LEVELS)[:, None] * np.asarray(TOON_BASE, np.float64)[None, :]
     angles = np.radians(np.asarray(HATCH_ANGLES, np.float64))
     tau, left, _ = family_thresholds(len(HATCH_ANGLES), HATCH_MAX_INK)
 

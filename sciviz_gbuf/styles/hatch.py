@@ -43,8 +43,8 @@ from scipy import ndimage
 from .. import _validate
 from ..core.gbuffer import GBuffer, check_gbuffer
 from ..errors import InputError
-from ..filters import lambert, profile_edges
-from .illustration import LIGHT, PAPER
+from ..filters import lambert
+from .illustration import LIGHT, PAPER, profile_ink
 from .registry import register
 
 __all__ = [
@@ -86,7 +86,9 @@ def _angles(value) -> np.ndarray:
     try:
         a = np.asarray(value, dtype=np.float64).reshape(-1)
     except (TypeError, ValueError, OverflowError):
-        raise InputError(f"angles: expected a sequence of degrees, got {value!r}") from None
+        raise InputError(
+            f"angles: expected a sequence of degrees, got {_validate.brief(value)}"
+        ) from None
     if not 1 <= a.size <= _MAX_FAMILIES or not np.all(np.isfinite(a)):
         raise InputError(
             f"angles: expected 1 to {_MAX_FAMILIES} finite angles in degrees, got {value!r}"
@@ -390,8 +392,9 @@ def hatch(
     keep = None
     if edges:
         # profiles are black whatever the ink colour (2003 edge enhancement: A channel), set
-        # off from the strokes by paper so that they stay visible over dark tones
-        prof = profile_edges(gb, width=pw)
+        # off from the strokes by paper so that they stay visible over dark tones; where they
+        # crowd into a clump (a small hole), only its skeleton, so they never fill an area
+        prof = profile_ink(gb, width=pw)
         halo = profile_halo(prof)
         # inside the object only: at the antialiased outline the strokes keep it dark
         halo[gb.downsample(mask.astype(np.float32)) < np.float32(1.0)] = np.float32(0.0)

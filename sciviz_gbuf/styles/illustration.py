@@ -15,6 +15,8 @@ from .. import _validate
 from ..core.gbuffer import GBuffer, check_gbuffer
 from ..errors import InputError
 from ..filters import crease_edges, edge_map, enhance, internal_edges, lambert, profile_edges
+from ..filters.edges import INNER_COLOR
+from ._ink import clump_cut
 from .registry import check_style, register, styles_for
 
 __all__ = [
@@ -26,8 +28,12 @@ __all__ = [
     "edges_to_map",
     "fig7_edge_map",
     "illustrate",
+    "is_dark",
+    "line_ink",
+    "profile_ink",
     "shade_image",
     "signed_to_grey",
+    "thin_edge_map",
 ]
 
 #: Eye-space light from the upper left, as in hand-drawn illustrations (every style's default).
@@ -38,6 +44,9 @@ PAPER = (1.0, 1.0, 1.0)
 #: that white edges stay visible on it).
 SHADE_AMBIENT = 0.2
 SHADE_HIGHLIGHT = 0.85
+#: Luminance below which a line colour is dark ink: lines drawn in it are kept from filling
+#: an area (:func:`thin_edge_map`).
+DARK_INK = 0.5
 
 
 def shade_image(
@@ -58,7 +67,7 @@ def shade_image(
     """
     gb = check_gbuffer(gb)
     if not 0.0 < _validate.finite(highlight, "highlight") <= 1.0:
-        raise InputError(f"highlight: expected a value in (0, 1], got {highlight!r}")
+        raise InputError(f"highlight: expected a value in (0, 1], got {_validate.brief(highlight)}")
     shade = lambert(gb.normal, light=light, ambient=ambient)
     shade = np.where(gb.mask, np.float32(highlight) * shade, np.float32(1.0))
     return np.clip(gb.downsample(shade), 0.0, 1.0).astype(np.float32, copy=False)
@@ -74,6 +83,106 @@ def signed_to_grey(values: np.ndarray, *, scale: float = 1.0) -> np.ndarray:
     return (0.5 + 0.5 * np.clip(v / np.float32(scale), -1.0, 1.0)).astype(np.float32)
 
 
+def is_dark(color: Sequence[float] | None, name: str = "color") -> bool:
+    """Whether lines drawn in ``color`` (RGB in [0, 1]; None: not drawn) are dark ink: Rec. 709
+    luminance below :data:`DARK_INK`. ``name``: the parameter named in an error."""
+    if color is None:
+        return False
+    rgb = _validate.rgb(color, name)
+    return float(rgb @ np.float32([0.2126, 0.7152, 0.0722])) < DARK_INK
+
+
+def _line_core(width: float) -> float:
+    """The width whose clumps :func:`~._ink.declump` thins, for lines ``width`` output pixels
+    wide: one pixel more, since antialiased lines off the pixel grid (and the 2003 lines,
+    which straddle the edge) have a half-ink core up to a pixel wider than their width."""
+    return float(width) + 1.0
+
+
+def thin_edge_map(
+    emap: np.ndarray,
+    width: float = 1.0,
+    *,
+    inner_color: Sequence[float] | None = INNER_COLOR,
+) -> np.ndarray:
+    """An RGBA edge map whose dark lines never fill an area.
+
+    Where the lines drawn in dark ink (the profiles in A; the inner edges in RGB too if
+    ``inner_color`` is dark, see :func:`is_dark`) crowd into a clump thicker than a line (a
+    bolt hole smaller than its outline, a thin fin between two profiles, a junction of
+    several lines) only the clump's skeleton keeps its ink, one pixel wide and connected to
+    the lines that run into it (:func:`~._ink.declump`); elsewhere the map is unchanged.
+    Drawn over a dark shade, such a clump would be one solid black area.
+
+    Parameters
+    ----------
+    emap : (H, W, 4) float32
+        An edge map (:func:`~sciviz_gbuf.filters.edge_map`, :func:`fig7_edge_map`):
+        inner-edge intensity in RGB, profile intensity in A.
+    width : float, default: 1
+        Its line width in output pixels.
+    inner_color : RGB or None, default: white
+        The colour the inner edges are drawn in (None: not drawn).
+
+    Returns
+    -------
+    (H, W, 4) float32: ``emap`` itself if nothing was thinned, else a thinned copy.
+    """
+    emap = np.asarray(emap, dtype=np.float32)
+    if emap.ndim != 3 or emap.shape[2] != 4:
+        raise InputError(f"emap: expected an (H, W, 4) RGBA edge map, got shape {emap.shape}")
+    width = _validate.size(width, "width", "line_width", low=1.0, closed=True)
+    dark_inner = is_dark(inner_color, "inner_color")
+    core = _line_core(width)
+    profile = np.clip(np.nan_to_num(emap[..., 3], nan=0.0), 0.0, 1.0)
+    cut = clump_cut(profile, core)  # profiles crowding: a small hole, a thin fin
+    shared = None
+    if dark_inner:
+        # both drawn dark, one over the other: together they leave (1 - R)(1 - A) of the shade
+        inner = np.clip(np.nan_to_num(emap[..., 0], nan=0.0), 0.0, 1.0)
+        shared = clump_cut(profile + inner - profile * inner, core)
+    if cut is None and shared is None:
+        return emap
+    out = emap.copy()
+    if cut is not None:
+        out[cut, 3] = np.float32(0.0)
+        if dark_inner:
+            out[cut, :3] = np.float32(0.0)
+    if shared is not None:
+        # Where dark inner edges run into profiles, the inner edges give way (but for the
+        # clump's skeleton) and the profiles keep their lines, so the silhouette stays
+        # outlined; profile ink too weak to be a line by itself (half-inked lines over one
+        # another) keeps only the skeleton.
+        out[shared, :3] = np.float32(0.0)
+        out[shared & ~(profile > 0.5), 3] = np.float32(0.0)
+    return out
+
+
+def _thinned(ink: np.ndarray, width: float) -> np.ndarray:
+    cut = clump_cut(ink, _line_core(width))
+    if cut is not None:
+        ink[cut] = np.float32(0.0)
+    return ink
+
+
+def profile_ink(gb: GBuffer, *, depth_jump: float = 1.0, width: float = 1.0) -> np.ndarray:
+    """Black profile lines (:func:`~sciviz_gbuf.filters.profile_edges`) that never fill an
+    area: clumps thinned to their skeleton (see :func:`thin_edge_map`). (H, W) float32 ink."""
+    return _thinned(profile_edges(gb, depth_jump=depth_jump, width=width), width)
+
+
+def line_ink(
+    gb: GBuffer, *, crease_angle: float = 30.0, depth_jump: float = 1.0, width: float = 1.0
+) -> np.ndarray:
+    """The ink of the ``lines`` style: profile and crease lines, clumps thinned to their
+    skeleton (see :func:`thin_edge_map`). (H, W) float32 in [0, 1] at the output size."""
+    ink = np.maximum(
+        profile_edges(gb, depth_jump=depth_jump, width=width),
+        crease_edges(gb, crease_angle=crease_angle, depth_jump=depth_jump, width=width),
+    )
+    return _thinned(ink, width)
+
+
 def fig7_edge_map(
     gb: GBuffer,
     *,
@@ -85,20 +194,34 @@ def fig7_edge_map(
     """The 1990 Fig. 7 edge image as an RGBA map for :func:`~sciviz_gbuf.filters.enhance`.
 
     RGB: convex internal edges (to be drawn white); A: concave internal edges and profiles (to
-    be drawn black). ``black_only``: all internal edges in A (Fig. 7 (c'), absolute values).
+    be drawn black), clumps of them thinned to their skeleton (see :func:`thin_edge_map`).
+    ``black_only``: all internal edges in A (Fig. 7 (c'), absolute values).
     """
     inner = internal_edges(gb, crease_angle=crease_angle, depth_jump=depth_jump, width=width)
     prof = profile_edges(gb, depth_jump=depth_jump, width=width)
-    return edges_to_map(inner, prof, black_only=black_only)
+    return edges_to_map(inner, prof, black_only=black_only, width=width)
 
 
-def edges_to_map(inner: np.ndarray, profile: np.ndarray, *, black_only: bool = False):
-    """RGBA edge map of signed internal edges and profile ink (see :func:`fig7_edge_map`)."""
+def edges_to_map(
+    inner: np.ndarray,
+    profile: np.ndarray,
+    *,
+    black_only: bool = False,
+    width: float | None = None,
+) -> np.ndarray:
+    """RGBA edge map of signed internal edges and profile ink (see :func:`fig7_edge_map`).
+
+    ``width``: the lines' width in output pixels; given, clumps of the black lines (A) are
+    thinned to their skeleton (:func:`thin_edge_map`); None leaves them as they are.
+    """
     if black_only:
         white, black = np.zeros_like(inner), np.maximum(profile, np.abs(inner))
     else:
         white, black = np.maximum(inner, 0.0), np.maximum(profile, np.maximum(-inner, 0.0))
-    return np.stack([white, white, white, black], axis=-1).astype(np.float32)
+    emap = np.stack([white, white, white, black], axis=-1).astype(np.float32)
+    if width is None:
+        return emap
+    return thin_edge_map(emap, width)
 
 
 def illustrate(
@@ -139,12 +262,11 @@ def illustrate(
     if style in ("enhance", "edgemap"):
         emap = edge_map(gb, operator=operator, **opts)
         if style == "edgemap":
-            return emap
-        return enhance(shade_image(gb, light=light), emap)
+            return emap  # the map itself, as the filter makes it
+        # black profiles never fill an area, even around a hole smaller than its outline
+        return enhance(shade_image(gb, light=light), thin_edge_map(emap, width))
     if style == "lines":
-        ink = np.maximum(
-            profile_edges(gb, depth_jump=depth_jump, width=width), crease_edges(gb, **opts)
-        )
+        ink = line_ink(gb, **opts)
         return np.repeat((1.0 - ink)[..., None], 3, axis=2).astype(np.float32)
     return enhance(shade_image(gb, light=light), fig7_edge_map(gb, **opts))
 

@@ -21,7 +21,7 @@ from .. import _validate
 from ..core.gbuffer import GBuffer, check_gbuffer
 from ..errors import InputError
 from ..filters import edge_map, enhance
-from .illustration import LIGHT, PAPER
+from .illustration import LIGHT, PAPER, thin_edge_map
 from .registry import register
 
 __all__ = [
@@ -34,11 +34,13 @@ __all__ = [
     "GOOCH_WARM",
     "MAX_LEVELS",
     "TOON_BASE",
+    "TOON_DARKEST",
     "TOON_INNER_COLOR",
     "TOON_LEVELS",
     "TOON_PROFILE_COLOR",
     "gooch",
     "toon",
+    "toon_shades",
 ]
 
 #: Largest shade texture :func:`toon` accepts (texels): ``LIMITS["shade_levels"]``.
@@ -59,6 +61,20 @@ TOON_LEVELS = 3
 TOON_BASE = (0.9, 0.55, 0.3)
 TOON_INNER_COLOR = (0.0, 0.0, 0.0)
 TOON_PROFILE_COLOR = (0.0, 0.0, 0.0)
+#: The darkest of ``k`` shade levels (``levels=k``), as a fraction of the base colour: light
+#: enough that the black lines stay apart from it. With the default base its luminance is
+#: 0.24, so even a half-inked pixel of an outline over it (0.12) is lighter than black
+#: (< 0.1): outline and band never merge into one black area, as they did with ``1 / k``.
+TOON_DARKEST = 0.4
+
+
+def toon_shades(levels: int) -> np.ndarray:
+    """The ``levels`` shades of ``toon(levels=k)``, darkest first: evenly spaced from
+    :data:`TOON_DARKEST` to 1 (1 alone for one level). (k,) float64."""
+    k = int(levels)
+    if k == 1:
+        return np.ones(1)
+    return TOON_DARKEST + (1.0 - TOON_DARKEST) * np.arange(k, dtype=np.float64) / (k - 1)
 
 
 def _unit_light(light: object) -> np.ndarray:
@@ -67,7 +83,9 @@ def _unit_light(light: object) -> np.ndarray:
     except (TypeError, ValueError):
         lv = np.zeros(0)
     if lv.size != 3 or not np.isfinite(lv).all() or not np.linalg.norm(lv) > 0:
-        raise InputError(f"light: expected a finite non-zero 3-vector (eye space), got {light!r}")
+        raise InputError(
+            f"light: expected a finite non-zero 3-vector (eye space), got {_validate.brief(light)}"
+        )
     return (lv / np.linalg.norm(lv)).astype(np.float32)
 
 
@@ -121,6 +139,9 @@ def _edges(
         # No inner edges: only the profiles are drawn.
         emap[..., :3] = 0.0
         inner_color = np.ones(3, dtype=np.float32)
+    # Dark lines never fill an area (a bolt hole smaller than its outline): their clumps keep
+    # only the skeleton, the inner edges' too when they are drawn dark (toon's black ones).
+    emap = thin_edge_map(emap, width, inner_color=inner_color)
     return enhance(rgb, emap, inner_color=inner_color, profile_color=profile_color)
 
 
@@ -197,7 +218,9 @@ def gooch(
     alpha, beta : float in [0, 1], default: 0.2, 0.6
         How much of the object colour enters the cool and the warm tone.
     edges : bool, default: True
-        Composite the 2003 edge map.
+        Composite the 2003 edge map; where its dark lines crowd into a clump thicker than a
+        line, only the clump's skeleton is drawn
+        (:func:`~sciviz_gbuf.styles.illustration.thin_edge_map`).
     operator, crease_angle, depth_jump, width
         As in :func:`sciviz_gbuf.filters.edge_map` (``width`` in [1, 64] output pixels: at
         most ``LIMITS["line_width"]``).
@@ -257,9 +280,8 @@ def _shade_table(levels: object, base: np.ndarray) -> np.ndarray:
         k = int(levels)
         if not 1 <= k <= MAX_LEVELS:
             raise InputError(f"levels: expected {expected}, got {_validate.brief(levels)}")
-        # k shades evenly spaced in (0, 1]: 1/k (darkest) ... 1 (full base colour)
-        shades = np.arange(1, k + 1, dtype=np.float64) / k
-        return (shades[:, None] * base[None, :]).astype(np.float32)
+        # k shades evenly spaced from TOON_DARKEST (not black) to 1 (the full base colour)
+        return (toon_shades(k)[:, None] * base[None, :]).astype(np.float32)
     try:
         arr = np.asarray(levels, dtype=np.float64)
     except (TypeError, ValueError, OverflowError):
@@ -381,7 +403,9 @@ def toon(
     light : 3 floats, default: :data:`~sciviz_gbuf.styles.illustration.LIGHT`
         Eye-space direction towards the light.
     levels : int, sequence of floats or (n, 3) array, default: 3
-        The shade texture. An int ``k``: shades ``1/k, 2/k, ..., 1`` times ``base``. A sequence
+        The shade texture. An int ``k``: ``k`` shades evenly spaced from :data:`TOON_DARKEST`
+        = 0.4 to 1, times ``base`` (:func:`toon_shades`; the darkest band is not black, so
+        the black outline stays apart from it). A sequence
         of shades in [0, 1] (darkest first, for ``s`` from 0 to 1): multiplied by ``base``. An
         (n, 3) table: RGB colours in [0, 1] used as they are (``base`` is ignored). At most
         :data:`MAX_LEVELS` = ``LIMITS["shade_levels"]`` = 256 texels.
@@ -390,7 +414,9 @@ def toon(
     smooth : float in [0, 1], default: 0
         Width, in units of ``N.L``, of the smoothed transitions; 0 keeps them hard.
     edges : bool, default: True
-        Composite the 2003 edge map.
+        Composite the 2003 edge map; where its dark lines crowd into a clump thicker than a
+        line, only the clump's skeleton is drawn
+        (:func:`~sciviz_gbuf.styles.illustration.thin_edge_map`).
     operator, crease_angle, depth_jump, width
         As in :func:`sciviz_gbuf.filters.edge_map` (``width`` in [1, 64] output pixels: at
         most ``LIMITS["line_width"]``).
@@ -411,7 +437,9 @@ def toon(
     except (TypeError, ValueError):
         sm = float("nan")
     if isinstance(smooth, bool) or not 0.0 <= sm <= 1.0:
-        raise InputError(f"smooth: expected a width in units of N.L in [0, 1], got {smooth!r}")
+        raise InputError(
+            f"smooth: expected a width in units of N.L in [0, 1], got {_validate.brief(smooth)}"
+        )
     inner_c = None if inner_color is None else _validate.rgb(inner_color, "inner_color")
     prof_c = _validate.rgb(profile_color, "profile_color")
     bg = _validate.rgb(background, "background")

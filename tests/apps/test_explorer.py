@@ -21,7 +21,13 @@ from sciviz_gbuf.apps.explorer import (
 from sciviz_gbuf.cli import build_parser
 from sciviz_gbuf.datasets import load_nut
 from sciviz_gbuf.errors import InputError
+from sciviz_gbuf.readers import read_scene
+from sciviz_gbuf.styles import styles_for
 from tests.apps.explorer_server import free_port, listening_addresses, served_explorer
+from tests.helpers.paths import SHARED_DATA
+from tests.styles.test_no_black_blobs import largest_solid_black
+
+STL = SHARED_DATA / "meshes" / "vtkdata_42400-IDGH.stl"
 
 
 @pytest.fixture(scope="module")
@@ -56,6 +62,23 @@ def test_render_changes_with_a_parameter_and_equals_the_direct_functions(nut_exp
         # functions (illustrate, styles, color_bands, contour_lines) to within one grey level.
         ref = style_image(e.gbuffer, e.params, height_range=e.height_range)
         assert _max_diff(img, ref) <= 1, change
+
+
+def test_dark_shade_keeps_the_fused_pass_equal_and_free_of_black_areas():
+    """The STL part lit from behind (all of it on the darkest shade, small bolt holes and a
+    thin fin whose outlines crowd): every explorer style stays within one grey level of the
+    style functions, whose edge layers are thinned where they clump, and fills no area
+    solid black (the 0.5 % rule of tests/styles/test_no_black_blobs.py)."""
+    if not STL.exists():
+        pytest.skip(f"{STL} is missing")
+    e = Explorer(read_scene(STL)[0], window_size=(240, 240))
+    n_object = int(e.gbuffer.mask.sum())
+    for style in sorted(styles_for("explore")):
+        img = e.render_image({"style": style, "light_elevation": -70.0, "light_azimuth": 60.0})
+        ref = style_image(e.gbuffer, e.params, height_range=e.height_range)
+        assert _max_diff(img, ref) <= 1, style
+        blob = largest_solid_black(img.astype(np.float32) / 255.0)
+        assert blob <= 0.005 * n_object, (style, blob, n_object)
 
 
 def test_parameters_do_not_recapture_but_the_camera_does(nut_explorer):

@@ -148,7 +148,11 @@ def test_view_selector_and_3d_style_layers(dem_explorer):
     e.render_image({"light_azimuth": 60.0})
     e.render_image({"style": "toon"})
     e.render_image({"style": "enhance"})
-    assert e.layer_runs == before  # light and style share the edge map: nothing recomputed
+    # light and style share the edge map: it is not recomputed (toon thins its black inner
+    # edges with the profiles where they clump: that cheap pass is a layer of its own)
+    assert {k: v for k, v in e.layer_runs.items() if k != "emap_thin"} == {
+        k: v for k, v in before.items() if k != "emap_thin"
+    }
     e.render_image({"crease_angle": 20.0})
     assert e.layer_runs["emap"] == before["emap"] + 1
     back = e.render_image({"view": "map"})
