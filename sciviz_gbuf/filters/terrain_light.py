@@ -48,6 +48,12 @@ def _local_max(z: np.ndarray, radius: float, dx: float, dy: float) -> np.ndarray
     )
 
 
+def default_sky_radius(dx: float, dy: float) -> float:
+    """:func:`sky_view`'s search distance when none is given: 50 cells of the coarser axis,
+    in metres (one definition for the filter and the chunk halo of the maps that call it)."""
+    return 50.0 * max(float(dx), float(dy))
+
+
 def sky_view_reach(radius: float, dx: float, dy: float) -> int:
     """Cells :func:`sky_view` reads around a cell (its stencil radius, for chunked evaluation):
     the most steps the ray march takes, ``radius`` metres in cells of the finer axis (a
@@ -259,7 +265,7 @@ def sky_view(
     directions = _validate.count(directions, "directions", "directions")
     _prepare(np.zeros((3, 3), np.float32), dx, dy, z_factor, None)  # checks dx, dy first
     if radius is None:
-        radius = 50.0 * max(float(dx), float(dy))
+        radius = default_sky_radius(dx, dy)
     radius = _check_radius(radius, dx, dy)
     if _chunks.any_dask(heights, mask):
         reach = radius

@@ -24,7 +24,7 @@ from ..filters import fill_nodata_ring, hillshade
 from ..filters import sky_view as sky_view_factor
 from ..filters.hillshade import FILL_RING_RADIUS
 from ..filters.hillshade import RADIUS as HILLSHADE_RADIUS
-from ..filters.terrain_light import sky_view_reach
+from ..filters.terrain_light import default_sky_radius, sky_view_reach
 from ..readers import DEM
 from ._intervals import choose_intervals, median_ground_slope, median_slope, slope_lattice
 from ._map import (
@@ -210,8 +210,7 @@ def _windowed_map(
     if light is not None:
         halo = max(halo, RELIEF_HALO)
         if sky_view:
-            reach = 50.0 * max(float(dx), float(dy))  # sky_view's default radius
-            halo = max(halo, sky_view_reach(reach, dx, dy))
+            halo = max(halo, sky_view_reach(default_sky_radius(dx, dy), dx, dy))
 
     def block(window: np.ndarray, inner: tuple[slice, slice]) -> np.ndarray:
         lay: dict = {"tables": tables, "relief": light is not None, "flat": flat, "ink": None}
