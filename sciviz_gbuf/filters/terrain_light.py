@@ -23,7 +23,11 @@ from .hillshade import check_grid, float32_heights
 
 __all__ = ["cast_shadows", "sky_view"]
 
-_SNAP = 1e-12  # sin/cos of multiples of 90 degrees are off by ~1e-16: snap them to 0 or +-1
+# sin/cos of multiples of 90 degrees are off by ~1e-16, and a sun 1e-10 degrees off north drifts
+# 3e-12 px a step: snap such components to 0 or +-1. A drift below 1e-9 px a step stays under
+# 1e-4 px over the longest ray, so the ray is cardinal; left unsnapped, it would step off a
+# one-cell-wide grid at once (the column "between" 0 and 1 does not exist) and see no horizon.
+_SNAP = 1e-9
 
 
 def _bounds(line: np.ndarray) -> np.ndarray:
