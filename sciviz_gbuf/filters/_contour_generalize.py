@@ -8,8 +8,13 @@ the ground many times, which draws specks and dashes. So the field is smoothed b
 whose width follows the local line spacing ``s = interval / g`` (in pixels, Eq. 9 units):
 ``sigma = clip(SIGMA_PER_PX * (s - STEEP_SPACING), 0, SIGMA_MAX)``. Where lines are at most
 ``STEEP_SPACING`` px apart nothing changes; on flat ground the field is averaged over up to
-``SIGMA_MAX`` px. The per-pixel sigma blends the field smoothed at the fixed widths ``SIGMAS``
-(linearly between the two around it), so the work is a few separable filters. ``g`` is taken
+``SIGMA_MAX`` px, but the smoothed value is kept within ``DISPLACE_MAX * g`` of the height
+(a tolerance band, as in line simplification), so no line moves more than ``DISPLACE_MAX``
+= 0.6 px from the exact one (about the exact lines' own agreement with ``gdal_contour``):
+the smoothing straightens the wiggles of a level that crosses gentle ground and the ring
+opening below removes the specks. The per-pixel sigma blends the field smoothed at the fixed
+widths ``SIGMAS`` (linearly between the two around it), so the work is a few separable
+filters. ``g`` is taken
 from the field smoothed at ``SIGMA_SLOPE``, so noise does not pass for slope.
 
 Each smoothed value is a local linear (not constant) weighted fit over the valid cells
@@ -54,6 +59,9 @@ SIGMA_PER_PX = 0.25
 #: The fixed smoothing widths (px) blended per pixel; 0 is the field itself.
 SIGMAS = (0.0, 1.0, 2.0, 4.0)
 SIGMA_MAX = SIGMAS[-1]
+#: The most a smoothed line may move from the exact line (px): a tolerance band, as in line
+#: simplification (:func:`tolerance_band`).
+DISPLACE_MAX = 0.6
 #: Smoothing of the field whose gradient decides the local spacing.
 SIGMA_SLOPE = 1.0
 #: The least smoothing of the gradient that sets line widths and the crowding fade.
@@ -166,8 +174,40 @@ def smooth_strip(
         gx = np.where(here, (1.0 - t) * lower[1] + t * upper[1], gx)
         gy = np.where(here, (1.0 - t) * lower[2] + t * upper[2], gy)
         lower = upper
+    gm = np.hypot(gx, gy)
+    out = np.clip(out, *tolerance_band(z64, valid, DISPLACE_MAX))
+    # Where the heights are exactly flat around a cell (a sea of exact zeros beside an island)
+    # the exact field's gradient is 0, so no line is drawn there (a value equal to a level
+    # counts as above it); the smoothed gradient would still reach there from the slope and
+    # make a wide line flood the flat ground at its level: zero it, as for the exact field.
+    flat = ndimage.maximum_filter(np.where(valid, z64, -np.inf), 3) == ndimage.minimum_filter(
+        np.where(valid, z64, np.inf), 3
+    )
+    gm = np.where(flat, 0.0, gm)
     out = np.where(valid, out, np.nan).astype(np.float32)
-    return out, np.where(valid, np.hypot(gx, gy), np.nan).astype(np.float32)
+    return out, np.where(valid, gm, np.nan).astype(np.float32)
+
+
+def tolerance_band(z: np.ndarray, valid: np.ndarray, r: float) -> tuple[np.ndarray, np.ndarray]:
+    """``(lo, hi)``: the range of the bilinear interpolant of ``z`` within ``r`` (< 1) cells
+    of each cell centre, over the valid cells. A smoothed value in that range is a height the
+    exact surface takes within ``r`` px, so the smoothed line through that cell lies within
+    ``r`` px of the exact one. Along an axis the interpolant moves ``r (z_k - z)`` towards
+    neighbour ``k``; towards a diagonal neighbour at most ``r / sqrt 2`` of the way (the
+    bilinear patch's largest change along the diagonal at that distance)."""
+    lo = z.copy()
+    hi = z.copy()
+    h, w = z.shape
+    pad = np.pad(np.where(valid, z, np.nan), 1, constant_values=np.nan)
+    for dr, dc in itertools.product((-1, 0, 1), repeat=2):
+        if dr == dc == 0:
+            continue
+        k = r if dr == 0 or dc == 0 else r / math.sqrt(2.0)
+        step = pad[1 + dr : 1 + dr + h, 1 + dc : 1 + dc + w] - z
+        step = np.where(np.isfinite(step), k * step, 0.0)
+        np.minimum(lo, z + step, out=lo)
+        np.maximum(hi, z + step, out=hi)
+    return lo, hi
 
 
 def drop_small_rings(

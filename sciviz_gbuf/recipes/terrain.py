@@ -98,8 +98,9 @@ def topographic_map(
         Cartographic generalisation of the contour lines
         (:func:`~sciviz_gbuf.filters.contour_lines` ``generalize=True``): the heights are
         smoothed before contouring as much as the local line spacing allows (none where lines
-        are at most 3 px apart, up to a 4 px Gaussian on flat ground), so integer-metre
-        terraces and noise draw no specks or dashes; rings and specks within 3 widths of the
+        are at most 3 px apart, up to a 4 px Gaussian on flat ground, but no line moves more
+        than 0.6 px from the exact one), so integer-metre terraces and noise draw no specks or
+        dashes; rings and specks within 3 widths of the
         widest line (6 px by default) are dropped. False draws the exact lines of the heights
         (those of ``gdal_contour``).
     contour_color : RGB, default: dark brown
