@@ -374,6 +374,7 @@ def _cmd_birdseye(args: argparse.Namespace) -> int:
             sea_level=args.sea_level,
             azimuth=args.azimuth,
             altitude=args.altitude,
+            z_factor=args.z_factor,
         )
         image = panels[args.style]
     write_png(out, image, dpi=args.dpi)
@@ -564,6 +565,13 @@ def add_birdseye(sub) -> None:
         type=number(lambda v: v > 0, "a number > 0"),
         default=1.0,
         help="vertical exaggeration of the surface (default 1)",
+    )
+    p.add_argument(
+        "--z-factor",
+        type=number(lambda v: v > 0, "a number > 0"),
+        default=None,
+        help="exaggeration of the relief shade only (default: automatic, 1 on rendered "
+        "ground steeper than 10 degrees, up to 20 on low-relief ground)",
     )
     _add_size_options(p, plan_view=False)
     p.add_argument("--supersample", type=positive_int, default=2, help="render at k times the size")

@@ -30,8 +30,10 @@ from ._map import (
     as_dem,
     check_bands,
     check_line_sizes,
+    check_z_factor,
     lit,
     relief_light,
+    relief_z_factor,
     rgba,
 )
 from ._resample import view_size
@@ -42,6 +44,8 @@ __all__ = [
     "birdseye_layers",
     "birdseye_map",
     "birdseye_panels",
+    "exaggerated_normals",
+    "rendered_ground_slope",
     "sumi_e",
 ]
 
@@ -168,6 +172,28 @@ def _gbuffer_of(dem_or_gbuffer, **capture_opts) -> GBuffer:
     return birdseye_gbuffer(dem_or_gbuffer, **capture_opts)
 
 
+def rendered_ground_slope(normal: np.ndarray, valid: np.ndarray) -> float:
+    """Median slope (rise over run) of the rendered terrain from its world normals (z up):
+    ``hypot(nx, ny) / |nz|`` over the valid pixels that are not flat (as
+    :func:`~._intervals.median_ground_slope` of a DEM); NaN without such a pixel."""
+    n = normal[valid].astype(np.float64)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.hypot(n[:, 0], n[:, 1]) / np.abs(n[:, 2])
+    t = t[np.isfinite(t) & (t > 1e-6)]
+    return float(np.median(t)) if t.size else float("nan")
+
+
+def exaggerated_normals(normal: np.ndarray, z_factor: float) -> np.ndarray:
+    """Unit normals of the surface whose heights are ``z_factor`` times those of the surface
+    with unit ``normal`` (z up): a surface ``z = f`` has normals along ``(-f_x, -f_y, 1)``,
+    ``k f`` along ``(-k f_x, -k f_y, 1)``, i.e. ``(k n_x, k n_y, n_z)``."""
+    n = normal.astype(np.float32, copy=True)
+    n[..., :2] *= np.float32(z_factor)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        n /= np.linalg.norm(n, axis=-1, keepdims=True)
+    return n
+
+
 def birdseye_layers(
     gb: GBuffer,
     *,
@@ -186,8 +212,16 @@ def birdseye_layers(
     vmax: float | None = None,
     azimuth: float = 315.0,
     altitude: float = 45.0,
+    z_factor: float | None = None,
 ) -> dict[str, np.ndarray]:
     """The enhanced images of a bird's-eye G-buffer, at its output size (1990 Fig. 12).
+
+    ``z_factor``: exaggeration of the relief shade ``sh`` (not of the geometry, which is
+    ``vert_exag`` of the capture), as in :func:`~sciviz_gbuf.recipes.terrain.topographic_map`:
+    the normals are lit as those of the surface with its heights times ``z_factor``. Default
+    automatic, the maps' rule on the rendered surface: ``clip(tan(10 deg) / m, 1, 20)`` for
+    ``m`` the median slope of the rendered ground (from the captured normals, flat pixels
+    left out), so the relief of a plain is not washed out and hilly ground keeps 1.
 
     Returns
     -------
@@ -226,7 +260,11 @@ def birdseye_layers(
             dense_spacing=dense_spacing * k,
             generalize=generalize,
         )
-    sh = lambert(gb.world_normal(), light=_sun(azimuth, altitude), mask=valid)
+    normal = gb.world_normal()
+    zf = relief_z_factor(check_z_factor(z_factor), rendered_ground_slope(normal, valid))
+    if zf != 1.0:
+        normal = exaggerated_normals(normal, zf)
+    sh = lambert(normal, light=_sun(azimuth, altitude), mask=valid)
     opts = check_bands(bands, major_interval if major_interval is not None else 5 * interval)
     if opts is None:
         rgb = np.ones((*elev.shape, 3), dtype=np.float32)
@@ -311,6 +349,7 @@ def birdseye_map(
     sea_level: float | None = None,
     azimuth: float = 315.0,
     altitude: float = 45.0,
+    z_factor: float | None = None,
     background: Sequence[float] | None = None,
     progress_bar: bool = False,
 ) -> np.ndarray:
@@ -338,6 +377,11 @@ def birdseye_map(
         Colour bands, as in :func:`~sciviz_gbuf.recipes.terrain.topographic_map`.
     azimuth, altitude : float, default: 315, 45
         The sun of the relief (GDAL's convention), lighting the surface's normals.
+    z_factor : float, optional
+        Exaggeration of the relief shade only (the geometry's is ``vert_exag``). Default
+        automatic, as in :func:`~sciviz_gbuf.recipes.terrain.topographic_map`:
+        ``clip(tan(10 deg) / m, 1, 20)`` for ``m`` the median slope of the rendered ground
+        (:func:`birdseye_layers`); a number is used as it is.
     background : RGB, optional
         Opaque background colour; default transparent.
     progress_bar : bool, default: False
@@ -375,6 +419,7 @@ def birdseye_map(
             sea_level=sea_level,
             azimuth=azimuth,
             altitude=altitude,
+            z_factor=z_factor,
         )
         bar.step("done")
     return panels["mx4"]

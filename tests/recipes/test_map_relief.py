@@ -132,3 +132,67 @@ def test_chunked_map_uses_the_same_automatic_factor():
         ref = sg.topographic_map(low, **kwargs)
         assert not np.array_equal(ref, sg.topographic_map(low, z_factor=1.0, **kwargs))
         assert np.array_equal(sg.topographic_map(lazy, **kwargs).compute(), ref)
+
+
+# -- the bird's-eye relief ---------------------------------------------------------------------
+BIRD = {"size": 240, "supersample": 1}
+
+
+def sh_contrast(layers: dict) -> float:
+    """Spread of a bird's-eye relief shade over its fully covered pixels."""
+    return float(layers["sh"][layers["alpha"] >= 1.0].std())
+
+
+def test_birdseye_low_relief_gets_the_contrast_of_normal_relief():
+    """As for plan-view maps: the hills flattened 20 times are washed out at z = 1 (the shade of
+    the geometry as rendered), automatically their shade has at least 40 % of the contrast
+    of the hills as they are; the geometry is the same in both (only the shade changes)."""
+    from sciviz_gbuf.recipes.birdseye import birdseye_gbuffer, birdseye_layers
+
+    d = hills(100.0)
+    normal = sh_contrast(birdseye_layers(birdseye_gbuffer(d, **BIRD), z_factor=1.0))
+    gb = birdseye_gbuffer(_scaled(d, 0.05), **BIRD)
+    washed = birdseye_layers(gb, z_factor=1.0)
+    auto = birdseye_layers(gb)
+    assert normal > 0.05, normal
+    assert sh_contrast(washed) < 0.15 * normal, (sh_contrast(washed), normal)
+    assert sh_contrast(auto) > 0.4 * normal, (sh_contrast(auto), normal)
+    assert np.array_equal(auto["alpha"], washed["alpha"])
+    assert np.array_equal(auto["cn"], washed["cn"])
+
+
+def test_birdseye_steep_ground_keeps_its_true_relief():
+    from sciviz_gbuf.recipes.birdseye import birdseye_gbuffer, birdseye_layers
+
+    gb = birdseye_gbuffer(hills(200.0), **BIRD)
+    assert np.array_equal(birdseye_layers(gb)["sh"], birdseye_layers(gb, z_factor=1.0)["sh"])
+
+
+def test_exaggerated_normals_are_those_of_the_exaggerated_surface():
+    """The shade's normals at z factor 3 are the normals VTK renders for the heights times 3
+    (a tilted plane: one normal everywhere)."""
+    from sciviz_gbuf.recipes.birdseye import (
+        birdseye_gbuffer,
+        exaggerated_normals,
+        rendered_ground_slope,
+    )
+
+    y, x = np.mgrid[0:60, 0:80].astype(np.float32)
+    plane = read_dem((0.3 * x + 0.1 * y).astype(np.float32), spacing=10.0)
+    flat_gb = birdseye_gbuffer(plane, **BIRD)
+    tall_gb = birdseye_gbuffer(_scaled(plane, 3.0), **BIRD)
+
+    def median_normal(n, gb):
+        return np.median(n[gb.mask].reshape(-1, 3), axis=0)
+
+    want = median_normal(tall_gb.world_normal(), tall_gb)
+    got = median_normal(exaggerated_normals(flat_gb.world_normal(), 3.0), flat_gb)
+    np.testing.assert_allclose(got, want, atol=2e-3)
+    # the slope of the rendered plane, rise over run: hypot(0.3, 0.1) / 10 m
+    slope = rendered_ground_slope(flat_gb.world_normal(), flat_gb.mask)
+    assert slope == pytest.approx(math.hypot(0.03, 0.01), rel=1e-3)
+
+
+def test_birdseye_z_factor_is_checked():
+    with pytest.raises(InputError, match="z_factor"):
+        sg.birdseye_map(hills(20.0), z_factor=float("nan"), **BIRD)
