@@ -26,14 +26,14 @@ import pyvista as pv
 from .._validate import LIMITS, at_most, number_in
 from ..compose import to_uint8
 from ..core.capture import capture
-from ..core.framing import check_up, default_up
+from ..core.framing import check_up, default_up, framed_camera
 from ..core.gbuffer import GBuffer
 from ..datasets import load_nut
 from ..errors import InputError
 from ..filters import color_bands, contour_lines, edge_map
 from ..readers import DEM, kind_of, read_dem, read_scene, suffixes
 from ..recipes.medical import ct_surface
-from ..recipes.terrain import CONTOUR_COLOR, composite, contour_intervals, map_layers
+from ..recipes.terrain import CONTOUR_COLOR, composite, contour_intervals, map_grid, map_layers
 from ..styles import check_style, gooch, hatch, styles_for, toon
 from ..styles.fused import FUSED_CONSTANTS, fused_style, rgba_on_paper
 from ..styles.illustration import (
@@ -225,6 +225,9 @@ class Params:
         }
 
 
+#: Points of the scene the orbit camera frames, at most about this many.
+_FRAME_POINTS = 20_000
+
 #: Bounds of the orbit camera: name -> ``(low, high, low_excluded)`` (degrees, zoom factor).
 CAMERA_BOUNDS: dict[str, tuple[float, float, bool]] = {
     "azimuth": (-360.0, 360.0, False),
@@ -339,9 +342,10 @@ class Explorer:
             raise InputError("scene: expected a non-empty PyVista dataset")
         self.up = default_up(self.scene) if self.up is None else check_up(self.up)
         self._up = "xyz".index(self.up)
-        b = np.asarray(self.scene.bounds, dtype=np.float64).reshape(3, 2)
-        self._centre = b.mean(axis=1)
-        self._radius = max(float(np.linalg.norm(b[:, 1] - b[:, 0])) / 2.0, 1e-9)
+        # The points the orbit camera frames (a strided subset of a big scene: its projected
+        # extent to well under a pixel at any view).
+        pts = np.asarray(self.scene.points, dtype=np.float64)
+        self._frame_points = pts[:: max(1, len(pts) // _FRAME_POINTS)]
         self.camera = _Camera(elevation=55.0 if self.kind == "dem" else 30.0)
         self._map_layers: dict[tuple, object] = {}
         self.map_range = (0.0, 1.0)
@@ -377,6 +381,13 @@ class Explorer:
                 transform=(x0, dx * step, rx * step, y0, ry * step, dy * step),
                 pixel_size=(dem.pixel_size[0] * step, dem.pixel_size[1] * step),
             )
+        # A DEM smaller than the window is mapped at the window's size, heights resampled
+        # smoothly (as topographic_map(size=)), instead of a small picture the browser blows
+        # up into stair-stepped lines.
+        h, w = dem.shape
+        fit = min(self.window_size[0] / w, self.window_size[1] / h)
+        if fit > 1.0 and isinstance(dem.heights, np.ndarray):
+            dem = map_grid(dem, size=(max(1, round(w * fit)), max(1, round(h * fit))))
         self.dem = dem
         self.kind = "dem"
         z = dem.heights
@@ -422,18 +433,27 @@ class Explorer:
 
         The orbit is around the up axis ``u`` (:attr:`up`): with the right-handed frame
         ``(e1, e2, u)`` of the cyclically next axes (z up: x, y; y up: z, x; x up: y, z) the
-        eye is in direction ``cos(el) (cos(az) e1 + sin(az) e2) + sin(el) u`` from the centre,
-        and ``u`` is upright in the picture (``e2`` when looking straight along it).
+        eye is in direction ``cos(el) (cos(az) e1 + sin(az) e2) + sin(el) u`` from the object,
+        and ``u`` is upright in the picture (``e2`` when looking straight along it). At zoom 1
+        the object's projected box is centred and fills 85 % of the limiting image side
+        (:func:`~sciviz_gbuf.core.framing.framed_camera`); zoom ``k`` brings the eye ``k``
+        times closer to the focal point.
         """
         az, el = math.radians(self.camera.azimuth), math.radians(self.camera.elevation)
         axes = np.eye(3)
         e1, e2, u = (axes[(self._up + k) % 3] for k in (1, 2, 0))
         d = math.cos(el) * (math.cos(az) * e1 + math.sin(az) * e2) + math.sin(el) * u
-        # The whole bounding sphere fits the 30° view angle at zoom 1.
-        dist = self._radius / math.sin(math.radians(15.0)) / self.camera.zoom
         view_up = u if abs(self.camera.elevation) < 89.0 else e2
-        pos = self._centre + dist * d
-        return tuple(pos.tolist()), tuple(self._centre.tolist()), tuple(view_up.tolist())
+        # At zoom 1 the object is framed by the one rule of every picture (its projected box
+        # centred, filling 85 % of the limiting side), not its bounding sphere (which leaves
+        # an elongated object small); zoom moves the eye towards the focal point.
+        w, h = self.window_size
+        pos, focal, up = framed_camera(
+            (), d, view_up, view_angle=30.0, aspect=w / h, points=self._frame_points
+        )
+        focal_v = np.asarray(focal)
+        eye = focal_v + (np.asarray(pos) - focal_v) / self.camera.zoom
+        return tuple(eye.tolist()), tuple(focal), tuple(up)
 
     def _layer(self, key: tuple, make, cache: dict | None = None) -> np.ndarray:
         """A filter result of the cached G-buffer, computed once per parameter ``key``: a slider

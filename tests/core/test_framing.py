@@ -179,3 +179,35 @@ def test_shared_stl_teapot_and_ct_default_views():
         supersample=1, smooth=0,
     )  # fmt: skip
     assert_framed(ct.mask)
+
+
+@pytest.mark.parametrize("azimuth, elevation, zoom", [(None, None, 1.0), (200.0, -20.0, 1.0)])
+def test_explorer_orbit_views_follow_the_rule(azimuth, elevation, zoom):
+    """The explorer's orbit camera frames the object by the one rule at any orbit position (a
+    long ellipsoid: its bounding sphere would leave it at about half the frame)."""
+    from sciviz_gbuf.apps.explorer import Explorer
+
+    e = Explorer(pv.ParametricEllipsoid(3, 1, 0.6).triangulate(), window_size=SIZE)
+    if azimuth is not None:
+        e.set_camera(azimuth=azimuth, elevation=elevation, zoom=zoom)
+    assert_framed(e.gbuffer.mask)
+    # zoom 2 brings the eye twice as close to the focal point
+    pos, focal, _ = e.camera_tuple()
+    e.set_camera(zoom=2.0)
+    pos2, focal2, _ = e.camera_tuple()
+    np.testing.assert_allclose(focal2, focal)
+    d1, d2 = (np.linalg.norm(np.subtract(p, focal)) for p in (pos, pos2))
+    assert d2 == pytest.approx(d1 / 2.0)
+
+
+def test_explorer_maps_a_small_dem_at_the_window_size():
+    """A DEM smaller than the window is mapped at the window's size (smooth lines), not one
+    picture pixel per cell."""
+    from sciviz_gbuf.apps.explorer import Explorer
+    from sciviz_gbuf.readers import read_dem
+
+    y, x = np.mgrid[0:40, 0:60].astype(np.float32)
+    dem = read_dem(np.hypot(x - 30, y - 20).astype(np.float32), spacing=10.0)
+    e = Explorer(dem.to_pyvista(), window_size=(240, 200), kind="dem", dem=dem)
+    img = e.render_image()
+    assert img.shape[:2] == (160, 240)  # the grid's aspect, fitted in the window
