@@ -4,8 +4,11 @@ For each PNG of a demo run (``sciviz-gbuf demo``; run here into a temporary fold
 ``--demo DIR`` names one) it prints, in one markdown table:
 
 - ``specks/1000``: isolated ink components (8-connected groups of dark pixels of at most
-  ``--speck`` = 4 px) per 1000 ink pixels. Ink is luminance < 0.45 on the picture's own
-  background, so a line drawing's stray dots and a map's contour speckle both count.
+  ``--speck`` = 4 px) per 1000 ink pixels. Ink is what is thin and dark: luminance at least
+  0.2 below the 7x7 grey closing of the picture (a black top-hat), so a line drawing's stray
+  dots and a map's contour speckle count, but the shading and colour bands of a coloured
+  picture do not. A colour bar strip below the picture (``compose.with_colorbar``: found by
+  its black frame) is cut off first: its tick labels are text, not specks.
 - ``black %``: the largest solid-black area (8-connected content pixels of luminance < 0.1,
   after an opening of 3x3 so that lines and outlines do not count) as a percentage of the
   content pixels.
@@ -32,9 +35,6 @@ empty frames, not every defect.
 from __future__ import annotations
 
 import argparse
-import itertools
-import json
-import shutil
 import subprocess
 import sys
 import tempfile
@@ -46,7 +46,11 @@ from PIL import Image
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
-SHARED = Path(__file__).resolve().parents[2] / "shared" / "data" / "dem"
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))  # the tests' helpers: gdal_contour's lines, the same reference
+from tests.helpers.gdal_contour import gdal_samples  # noqa: E402
+
+SHARED = ROOT.parent / "shared" / "data" / "dem"
 # A fixed contour interval per DEM for the comparison with gdal_contour (lines a few px apart).
 GDAL_INTERVALS = {
     "hugo_site.asc": 10.0,
@@ -87,13 +91,32 @@ def specks(ink: np.ndarray, most: int) -> tuple[int, float]:
     return n, 1000.0 * float(np.sum(sizes <= most)) / n
 
 
+def without_colorbar(rgb: np.ndarray) -> tuple[np.ndarray, bool]:
+    """``rgb`` without the colour bar strip of ``compose.with_colorbar`` below it (found by the
+    top edge of the bar's black frame: a row of the lowest quarter that is dark over at least
+    80 % of the width), and whether there was one."""
+    h, w = rgb.shape[:2]
+    dark = luminance(rgb) < 0.2
+    for y in range(h - 1, h - h // 4 - 1, -1):
+        if dark[y].sum() >= 0.8 * w and y + 1 < h and not dark[y + 1].sum() >= 0.8 * w:
+            # the frame's bottom edge was seen first: go on to its top edge
+            top = y
+            while top - 1 >= 0 and not dark[top - 1].sum() >= 0.8 * w and top > y - h // 8:
+                top -= 1
+            if top - 1 >= 0 and dark[top - 1].sum() >= 0.8 * w:
+                return rgb[: max(1, top - 1 - 2)], True  # the frame is 2 rows below
+            return rgb, False
+    return rgb, False
+
+
 def audit_png(path: Path, speck: int) -> dict[str, float]:
-    rgb = load_rgb(path)
+    rgb, _ = without_colorbar(load_rgb(path))
     h, w = rgb.shape[:2]
     bg = background(rgb)
     content = np.abs(rgb - bg).max(axis=2) > 0.08
     lum = luminance(rgb)
-    ink = content & (lum < 0.45)
+    # thin and dark: a black top-hat, so broad shading and dark bands are not ink
+    ink = content & (ndimage.grey_closing(lum, size=(7, 7)) - lum > 0.2)
     n_ink, per_k = specks(ink, speck)
     # only content: a black background (depth, mask images) is not a black blob
     black = ndimage.binary_opening(content & (lum < 0.1), structure=np.ones((3, 3), bool))
@@ -131,30 +154,6 @@ def map_ink(rgba: np.ndarray) -> np.ndarray:
     return alpha & (luminance(rgb) < 0.85)  # minor lines fade: anything not paper is ink
 
 
-def gdal_samples(src: Path, interval: float, tmp: Path) -> np.ndarray | None:
-    """``gdal_contour`` lines of ``src`` as (N, 2) (row, col) pixel-centre samples."""
-    import rasterio
-
-    if shutil.which("gdal_contour") is None:
-        return None
-    out = tmp / f"{src.stem}.geojson"
-    cmd = ["gdal_contour", "-q", "-i", repr(interval), "-f", "GeoJSON", str(src), str(out)]
-    subprocess.run(cmd, check=True, capture_output=True)
-    with rasterio.open(src) as ds:
-        x0, dx, rx, y0, ry, dy = ds.transform.to_gdal()
-    inv = np.linalg.inv([[dx, rx], [ry, dy]])
-    pts = []
-    for feature in json.loads(out.read_text())["features"]:
-        geom = feature["geometry"]
-        parts = geom["coordinates"] if geom["type"] == "MultiLineString" else [geom["coordinates"]]
-        for line in parts:
-            cr = (np.asarray(line, float)[:, :2] - [x0, y0]) @ inv.T - 0.5
-            for a, b in itertools.pairwise(cr):
-                n = int(np.ceil(np.hypot(*(b - a)) / 0.05)) + 1
-                pts.append(a + (b - a) * np.linspace(0.0, 1.0, n)[:, None])
-    return np.concatenate(pts)[:, ::-1] if pts else None
-
-
 def audit_dems(tmp: Path) -> list[tuple]:
     import sciviz_gbuf as sg
     from sciviz_gbuf.readers import read_dem
@@ -170,7 +169,7 @@ def audit_dems(tmp: Path) -> list[tuple]:
         n6, per_k6 = specks(ink, 6)
         precision = recall = float("nan")
         interval = GDAL_INTERVALS.get(path.name)
-        pts = gdal_samples(path, interval, tmp) if interval else None
+        pts = gdal_samples(path, interval, tmp) if interval else None  # tests/helpers
         if pts is not None:
             fixed = np.asarray(
                 sg.topographic_map(dem, bands=False, relief=False, interval=interval)

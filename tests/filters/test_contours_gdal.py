@@ -14,10 +14,7 @@ the half-interval shift below shows it is not.
 
 from __future__ import annotations
 
-import itertools
-import json
 import shutil
-import subprocess
 import warnings
 from pathlib import Path
 
@@ -28,6 +25,7 @@ from scipy.spatial import cKDTree
 
 from sciviz_gbuf.filters import contour_lines
 from sciviz_gbuf.readers import read_dem
+from tests.helpers import gdal_contour
 
 rasterio = pytest.importorskip("rasterio")
 
@@ -72,23 +70,9 @@ def gdal_samples(src: Path, interval: float, base: float, tmp_path: Path) -> np.
     """``gdal_contour -i interval -off base`` lines as (N, 2) (row, col) pixel-centre samples."""
     if shutil.which("gdal_contour") is None:
         pytest.skip("gdal_contour (gdal-bin) is not installed")
-    out = tmp_path / "contours.geojson"
-    cmd = ["gdal_contour", "-q", "-i", repr(interval), "-off", repr(base), "-f", "GeoJSON"]
-    subprocess.run([*cmd, str(src), str(out)], check=True, capture_output=True)
-    with rasterio.open(src) as ds:
-        x0, dx, rx, y0, ry, dy = ds.transform.to_gdal()
-    inv = np.linalg.inv([[dx, rx], [ry, dy]])
-    pts = []
-    for feature in json.loads(out.read_text())["features"]:
-        geom = feature["geometry"]
-        parts = geom["coordinates"] if geom["type"] == "MultiLineString" else [geom["coordinates"]]
-        for line in parts:
-            # corners -> pixel-centre coordinates: GDAL's values sit at the pixel centres
-            cr = (np.asarray(line, float)[:, :2] - [x0, y0]) @ inv.T - 0.5
-            for a, b in itertools.pairwise(cr):
-                n = int(np.ceil(np.hypot(*(b - a)) / 0.05)) + 1
-                pts.append(a + (b - a) * np.linspace(0.0, 1.0, n)[:, None])
-    return np.concatenate(pts)[:, ::-1]
+    pts = gdal_contour.gdal_samples(src, interval, tmp_path, base=base)
+    assert pts is not None, f"gdal_contour drew no line of {src}"
+    return pts
 
 
 def compare(z, pts, *, interval, base, generalize=False, steep=None, apart=None):
