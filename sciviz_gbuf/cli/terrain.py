@@ -383,6 +383,17 @@ def _cmd_birdseye(args: argparse.Namespace) -> int:
     return 0
 
 
+def _add_z_factor(p: argparse.ArgumentParser, what: str, ground: str) -> None:
+    """``--z-factor``: a number > 0, default automatic (the maps' rule on ``ground``)."""
+    p.add_argument(
+        "--z-factor",
+        type=number(lambda v: v > 0, "a number > 0"),
+        default=None,
+        help=f"{what}; default: automatic, 1 on {ground} steeper than 10 degrees, up to 20 on "
+        "low-relief ground)",
+    )
+
+
 def _add_map_style(p: argparse.ArgumentParser, *, tiles: bool = False) -> None:
     """Options shared by the plan-view and bird's-eye maps; ``tiles``: several DEM files (one
     mosaic) and a .png or .tif output."""
@@ -473,13 +484,7 @@ def add_topo(sub) -> None:
         default=2.0,
         help="major contour width in pixels (default 2)",
     )
-    p.add_argument(
-        "--z-factor",
-        type=number(lambda v: v > 0, "a number > 0"),
-        default=None,
-        help="vertical exaggeration of the relief (GDAL's -z; default: automatic, 1 on "
-        "ground steeper than 10 degrees, up to 20 on low-relief ground)",
-    )
+    _add_z_factor(p, "vertical exaggeration of the relief (GDAL's -z", "ground")
     p.add_argument(
         "--variant",
         default="regular",
@@ -566,13 +571,8 @@ def add_birdseye(sub) -> None:
         default=1.0,
         help="vertical exaggeration of the surface (default 1)",
     )
-    p.add_argument(
-        "--z-factor",
-        type=number(lambda v: v > 0, "a number > 0"),
-        default=None,
-        help="exaggeration of the relief shade only (default: automatic, 1 on rendered "
-        "ground steeper than 10 degrees, up to 20 on low-relief ground)",
-    )
+    _add_z_factor(p, "exaggeration of the relief shade only (the geometry's is --vert-exag",
+                  "rendered ground")  # fmt: skip
     _add_size_options(p, plan_view=False)
     p.add_argument("--supersample", type=positive_int, default=2, help="render at k times the size")
     p.add_argument(
