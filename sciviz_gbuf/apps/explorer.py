@@ -570,8 +570,13 @@ class Explorer:
             layers["ink"] = self._layer(key, lambda: part(contours=True)["ink"], cache)
         if kw["bands"] is not False:
             b = kw["bands"]
-            key = ("map_bands", b if isinstance(b, str) else tuple(b))
-            layers["tables"] = self._layer(key, lambda: part(bands=b)["tables"], cache)
+            # the band islands filled are the rings the lines drop: up to 3 widest widths
+            widest = max(kw["width"], kw["major_width"] if kw["major_interval"] else 0.0)
+            key = ("map_bands", b if isinstance(b, str) else tuple(b), widest)
+            bl = self._layer(key, lambda: part(bands=b), cache)
+            layers["tables"] = bl["tables"]
+            if bl.get("band_z") is not None:
+                layers["band_z"] = bl["band_z"]
         key = ("map_relief", kw["azimuth"], kw["altitude"], kw["z_factor"], kw["variant"])
         rel = self._layer(key, lambda: part(relief=True), cache)
         layers["sh"], layers["flat"] = rel["sh"], rel["flat"]

@@ -4,7 +4,7 @@ line images are ink in [0, 1] with 1 = full ink (signed images are documented as
 
 from .bands import BATHYMETRIC, HYPSOMETRIC, color_bands, composite_map
 from .contour_vectors import ContourPolyline, contour_polylines, polylines_to_geojson
-from .contours import contour_lines, hatching
+from .contours import band_heights, contour_lines, hatching
 from .edges import crease_edges, edge_map, enhance, id_edges, internal_edges, profile_edges
 from .hillshade import fill_nodata_ring, hillshade
 from .operators import (
@@ -24,6 +24,7 @@ __all__ = [
     "BATHYMETRIC",
     "HYPSOMETRIC",
     "ContourPolyline",
+    "band_heights",
     "c1_discontinuity",
     "cast_shadows",
     "color_bands",

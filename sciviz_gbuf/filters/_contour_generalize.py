@@ -258,3 +258,35 @@ def ring_opening(ink: np.ndarray, cut: np.ndarray, min_ring: float, min_stub: fl
     return _k.ring_opening(
         ink, node, order, np.ascontiguousarray(cut), np.float32(min_ring), np.float32(min_stub)
     )
+
+
+def band_heights(z: np.ndarray, valid: np.ndarray, band_index, min_ring: float) -> np.ndarray:
+    """Heights for colour bands that agree with generalised contour lines: ``z`` where every
+    band island, an 8-connected piece of one band (``band_index(heights)``, integers) whose
+    bounding box is at most ``min_ring`` px on its longer side and which touches neither the
+    grid's edge nor a cell that is not ``valid``, takes the height of the nearest cell outside
+    it, so the islands whose rings the lines drop (:func:`drop_small_rings`) are not left as
+    specks of colour. Elsewhere the heights are kept: their band edges are the exact lines,
+    which the generalised lines follow within ``DISPLACE_MAX`` px, under a line's width.
+    Float32, NaN where not ``valid``. Local: a halo of ``ceil(min_ring) + 1`` gives the same
+    cells chunk by chunk."""
+    s = np.where(valid, z, np.nan).astype(np.float32)
+    if min_ring <= 0 or not valid.any():
+        return s
+    band = np.where(valid, band_index(np.where(valid, s, 0.0)), np.iinfo(np.int64).min)
+    eight = np.ones((3, 3), bool)
+    cut = ndimage.binary_dilation(~valid, structure=eight)
+    cut[0, :] = cut[-1, :] = cut[:, 0] = cut[:, -1] = True
+    small = np.zeros(s.shape, bool)
+    for v in np.unique(band[valid]):
+        labels, _ = ndimage.label(band == v, structure=eight)
+        boxes = ndimage.find_objects(labels)
+        extent = np.array([max(b[0].stop - b[0].start, b[1].stop - b[1].start) for b in boxes])
+        island = np.concatenate([[False], extent <= min_ring])
+        island[np.unique(labels[cut])] = False
+        if island.any():
+            small |= island[labels]
+    if small.any():
+        _, (ri, ci) = ndimage.distance_transform_edt(small, return_indices=True)
+        s[small] = s[ri[small], ci[small]]
+    return s

@@ -12,6 +12,7 @@ import numpy as np
 from .. import _dask, _validate
 from ..errors import InputError
 from ..filters import (
+    band_heights,
     cast_shadows,
     composite_map,
     contour_lines,
@@ -20,7 +21,7 @@ from ..filters import (
 )
 from ..filters import sky_view as sky_view_factor
 from ..filters.bands import band_tables
-from ..filters.contours import contour_halo
+from ..filters.contours import MIN_RING_WIDTHS, contour_halo
 from ..readers import DEM, read_dem
 from ._intervals import contour_intervals, median_ground_slope, slope_lattice
 
@@ -36,6 +37,7 @@ __all__ = [
     "flat_shade",
     "lazy_dem",
     "lit",
+    "map_band_heights",
     "map_band_tables",
     "map_contour_halo",
     "map_contours",
@@ -199,6 +201,12 @@ def map_layers(
             dense_spacing=dense_spacing,
             generalize=generalize,
         )
+    if generalize and layers["tables"] is not None:
+        # the band edges follow the generalised lines (no islands of colour where rings went)
+        layers["band_z"] = map_band_heights(
+            z, bands, interval=interval, major_interval=major_interval, width=width,
+            major_width=major_width,
+        )  # fmt: skip
     if bar is not None:
         bar.step("relief")
     if relief:
@@ -236,6 +244,27 @@ def map_band_tables(bands, interval, major_interval, cmap, vmin, vmax, sea_level
         vmax=vmax,
         sea_level=sea_level,
         sea_cmap=None,
+    )
+
+
+def map_band_heights(
+    z, bands, *, interval: float, major_interval: float | None, width: float, major_width: float
+):
+    """The heights a generalised map colours its bands by (numpy or dask): those of
+    :func:`~sciviz_gbuf.filters.band_heights`, without the band islands whose rings the lines
+    drop (rings up to 3 widths of the widest line, as in
+    :func:`map_contours`); None when the bands need the heights as they are (no bands, a
+    continuous ramp)."""
+    band_interval = major_interval if major_interval is not None else 5.0 * float(interval)
+    opts = check_bands(bands, band_interval)
+    if not opts:
+        return None
+    widest = max(width, major_width) if major_interval is not None else width
+    return band_heights(
+        z,
+        band_interval=opts.get("interval"),
+        band_levels=opts.get("levels"),
+        min_ring=MIN_RING_WIDTHS * float(widest),
     )
 
 
@@ -289,8 +318,9 @@ def _contour_options(interval, major_interval, width, major_width, dense_spacing
 def composite(layers: dict, heights: np.ndarray, colour: np.ndarray) -> np.ndarray:
     """The map's layers (of :func:`map_layers`) into one RGBA uint8 image in one fused pass
     (:func:`~sciviz_gbuf.filters.composite_map`; no float image of the whole map is made)."""
+    band_z = layers.get("band_z")
     return composite_map(
-        heights,
+        heights if band_z is None else band_z,
         tables=layers["tables"],
         relief=layers["sh"] if layers["relief"] else None,
         flat=layers.get("flat", 1.0),

@@ -100,9 +100,11 @@ def topographic_map(
         smoothed before contouring as much as the local line spacing allows (none where lines
         are at most 3 px apart, up to a 4 px Gaussian on flat ground, but no line moves more
         than 0.6 px from the exact one), so integer-metre terraces and noise draw no specks or
-        dashes; rings and specks within 3 widths of the
-        widest line (6 px by default) are dropped. False draws the exact lines of the heights
-        (those of ``gdal_contour``).
+        dashes; rings and specks within 3 widths of the widest line (6 px by default) are
+        dropped. The band islands whose rings were dropped take the colour of the band around
+        them (:func:`~sciviz_gbuf.filters.band_heights`): no specks of colour, and band edges
+        run along the lines (within their 0.6 px). False draws the exact lines and bands of
+        the heights (lines those of ``gdal_contour``).
     contour_color : RGB, default: dark brown
     bands : bool, 'continuous', float or sequence of float, default: True
         Colour bands: True one band per major interval; a number, the band interval; a list,

@@ -30,6 +30,7 @@ from ._intervals import choose_intervals, median_ground_slope, median_slope, slo
 from ._map import (
     composite,
     flat_shade,
+    map_band_heights,
     map_band_tables,
     map_contour_halo,
     map_contours,
@@ -129,6 +130,11 @@ def lazy_topographic_map(
     if relief:
         hillshade(np.zeros((3, 3), np.float32), dx=dx, dy=dy, **light)  # checks now
         flat = max(flat_shade(dx=dx, dy=dy, **light), 1e-3)
+    # generalised maps colour their bands by the heights their lines are drawn from
+    band_options = None
+    if generalize and tables is not None:
+        band_options = {"bands": bands, "interval": interval, "major_interval": major_interval,
+                        "width": width, "major_width": major_width}  # fmt: skip
     if _chunks.windows_of(z) is not None:
         ink_options = {
             "interval": interval,
@@ -140,9 +146,13 @@ def lazy_topographic_map(
         }
         return _windowed_map(
             z, colour, tables, ink_options if contours else None, light if relief else None,
-            sky_view and relief, dx, dy, flat,
+            sky_view and relief, dx, dy, flat, band_options,
         )  # fmt: skip
     layers: dict[str, object] = {}
+    if band_options is not None:
+        band_z = _band_z(z, band_options)
+        if band_z is not None:
+            layers["band_z"] = band_z
     if contours:
         layers["ink"] = map_contours(
             z,
@@ -186,6 +196,15 @@ def lazy_topographic_map(
     )
 
 
+def _band_z(z, band_options: dict):
+    """:func:`~._map.map_band_heights` of ``z`` (numpy or dask) with the map's options."""
+    o = band_options
+    return map_band_heights(
+        z, o["bands"], interval=o["interval"], major_interval=o["major_interval"],
+        width=o["width"], major_width=o["major_width"],
+    )  # fmt: skip
+
+
 def _windowed_map(
     z,
     colour: np.ndarray,
@@ -196,6 +215,7 @@ def _windowed_map(
     dx: float,
     dy: float,
     flat: float,
+    band_options: dict | None = None,
 ):
     """The map of heights that can be read by window (:func:`~sciviz_gbuf._dask.map_windows`):
     one task per chunk reads the chunk with the widest halo any layer needs and computes every
@@ -211,6 +231,13 @@ def _windowed_map(
         halo = max(halo, RELIEF_HALO)
         if sky_view:
             halo = max(halo, sky_view_reach(default_sky_radius(dx, dy), dx, dy))
+    if band_options is not None:
+        # the lines' smoothing and ring size: the generalised lines' halo
+        halo = max(halo, map_contour_halo(
+            interval=band_options["interval"], major_interval=band_options["major_interval"],
+            width=band_options["width"], major_width=band_options["major_width"],
+            dense_spacing=1.0,
+        ))  # fmt: skip
 
     def block(window: np.ndarray, inner: tuple[slice, slice]) -> np.ndarray:
         lay: dict = {"tables": tables, "relief": light is not None, "flat": flat, "ink": None}
@@ -222,6 +249,10 @@ def _windowed_map(
                 lay["sky"] = sky_view_factor(window, dx=dx, dy=dy, z_factor=light["z_factor"])[
                     inner
                 ]
+        if band_options is not None:
+            band_z = _band_z(window, band_options)
+            if band_z is not None:
+                lay["band_z"] = band_z[inner]
         return composite(lay, np.ascontiguousarray(window[inner]), colour)
 
     return _chunks.map_windows(block, z, halo=halo, dtype=np.uint8, bands=4)

@@ -129,12 +129,13 @@ def test_a_control_recomputes_only_its_layer(dem_explorer):
     assert recomputed({"relief": "combined"}) == {"map_relief"}
     assert recomputed({"map_interval": 12.0}) == {"map_contours"}
     assert recomputed({"major_every": 3}) == {"map_contours"}
-    assert recomputed({"map_width": 2.0}) == {"map_contours"}
+    # the widest line sets the rings dropped, and so the band islands filled
+    assert recomputed({"map_width": 2.0}) == {"map_contours", "map_bands"}
     assert recomputed({"map_bands": 7}) == {"map_bands"}
     assert recomputed({"map_bands": 4}) == set()  # seen before: cached
     assert recomputed({"style": "toon", "crease_angle": 10.0}) == set()  # 3-D only
     assert e.captures == 0
-    assert sum(e.layer_runs.values()) == sum(runs.values()) + 8
+    assert sum(e.layer_runs.values()) == sum(runs.values()) + 9
 
 
 def test_view_selector_and_3d_style_layers(dem_explorer):

@@ -141,3 +141,82 @@ def test_chunked_lines_are_the_same_pixels():
     whole = contour_lines(z, **OPTIONS, generalize=True)
     lazy = contour_lines(da.from_array(z, chunks=(17, 29)), **OPTIONS, generalize=True)
     assert np.array_equal(lazy.compute(), whole)
+
+
+# -- band heights: colour bands that agree with the generalised lines --------------------------
+def bumps_across_a_band_edge():
+    """A slope rising through the 100 m band edge, with small flat knolls on the low side just
+    above the edge (3 and 5 px square terraces at 101 m: smoothing keeps them, as it keeps
+    any flat terrace) and a large bump crossing it widely (17 px)."""
+    y, x = np.mgrid[0:80, 0:120].astype(np.float64)
+    z = 80.0 + 0.2 * x  # 100 m at column 100
+    z += np.maximum(0.0, 1.0 - np.hypot(x - 60, y - 40) / 12.0) * (120.0 - 92.0)
+    z[19:22, 29:32] = 101.0
+    z[53:58, 28:33] = 101.0
+    return z.astype(np.float32)
+
+
+def band_islands(band: np.ndarray) -> list[int]:
+    """Sizes (longer bounding-box side) of the 8-connected pieces of each band."""
+    out = []
+    for v in np.unique(band):
+        labels, _ = ndimage.label(band == v, EIGHT)
+        out += [max(b[0].stop - b[0].start, b[1].stop - b[1].start)
+                for b in ndimage.find_objects(labels)]  # fmt: skip
+    return out
+
+
+def test_band_heights_drop_the_islands_the_lines_drop():
+    from sciviz_gbuf.filters import band_heights
+
+    z = bumps_across_a_band_edge()
+    raw = np.floor(z / 100.0)
+    got = np.floor(band_heights(z, band_interval=100.0, min_ring=6.0) / 100.0)
+    # the bumps of radius 2 and 3 px make islands of the upper band; the 12 px one stays
+    assert sorted(band_islands(raw))[:2] <= [6, 6] and len(band_islands(raw)) == 5
+    assert len(band_islands(got)) == 3, band_islands(got)
+    assert got[40, 60] == 1 and got[20, 30] == 0 and got[55, 30] == 0
+    # away from the bumps the band edge is where it was (the plane is not moved)
+    np.testing.assert_array_equal(got[:, 90:], raw[:, 90:])
+    # the lines drop the same rings: no major ink on the small bumps
+    ink = contour_lines(z, interval=2.0, major_interval=100.0, width=1.0, major_width=2.0,
+                        c_dense=1.0, generalize=True)  # fmt: skip
+    majors = contour_lines(z, levels=[100.0], width=2.0, generalize=True, min_ring=6.0)
+    assert majors[15:26, 25:36].max() == 0.0 and majors[48:63, 22:39].max() == 0.0
+    assert majors[25:56, 45:76].max() > 0.9 and ink.max() > 0.9
+    # band edges run along the generalised major line: within 1 px of its ink
+    edge = (np.diff(got, axis=1) != 0)[:, :]
+    rows, cols = np.nonzero(edge)
+    line = majors >= 0.5
+    near = ndimage.binary_dilation(line, np.ones((3, 3), bool))
+    assert near[rows, cols].mean() > 0.95 and near[rows, cols + 1].mean() > 0.95
+
+
+def test_band_heights_by_levels_and_chunks_are_the_same():
+    da = pytest.importorskip("dask.array")
+    from sciviz_gbuf.filters import band_heights
+
+    z = bumps_across_a_band_edge()
+    a = band_heights(z, band_interval=100.0)
+    b = band_heights(z, band_levels=[0.0, 100.0, 200.0])
+    np.testing.assert_array_equal(a, b)
+    lazy = band_heights(da.from_array(z, chunks=(23, 31)), band_interval=100.0)
+    np.testing.assert_array_equal(lazy.compute(), a)
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({}, "band_interval"),
+        ({"band_interval": 10.0, "band_levels": [1.0]}, "band_interval"),
+        ({"band_interval": -1.0}, "band_interval"),
+        ({"band_levels": [1.0, float("nan")]}, "band_levels"),
+        ({"band_interval": 10.0, "min_ring": -1.0}, "min_ring"),
+    ],
+)
+def test_band_heights_checks_its_options(kwargs, match):
+    from sciviz_gbuf.errors import InputError
+    from sciviz_gbuf.filters import band_heights
+
+    with pytest.raises(InputError, match=match):
+        band_heights(np.zeros((8, 8), np.float32), **kwargs)
