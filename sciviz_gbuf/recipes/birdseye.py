@@ -22,7 +22,8 @@ from ..core.capture import capture, check_capture_size
 from ..core.framing import terrain_birdseye_camera
 from ..core.gbuffer import GBuffer
 from ..errors import InputError
-from ..filters import color_bands, contour_lines, lambert, profile_edges
+from ..filters import band_heights, color_bands, contour_lines, lambert, profile_edges
+from ..filters.contours import MIN_RING_WIDTHS
 from ..readers import DEM
 from ._intervals import contour_intervals
 from ._map import (
@@ -269,8 +270,16 @@ def birdseye_layers(
     if opts is None:
         rgb = np.ones((*elev.shape, 3), dtype=np.float32)
     else:
+        band_z = elev
+        if generalize and opts:
+            # no island of band colour where the generalised lines dropped a ring
+            widest = max(width, major_width) if major_interval is not None else width
+            band_z = band_heights(
+                elev, band_interval=opts.get("interval"), band_levels=opts.get("levels"),
+                min_ring=MIN_RING_WIDTHS * widest * k,
+            )  # fmt: skip
         rgb = color_bands(
-            elev,
+            band_z,
             cmap=cmap,
             sea_level=sea_level,
             vmin=lo if vmin is None else vmin,

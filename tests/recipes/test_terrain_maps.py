@@ -499,3 +499,18 @@ def test_generalised_maps_leave_no_islands_of_band_colour(shared_data, name):
         )
     if name in ("jacksboro", SHARED_DEMS[0]):  # (hugo_site and pre_runout have no islands)
         assert exact_total > 0
+
+
+def test_birdseye_bands_leave_no_islands_where_lines_dropped_rings():
+    """The bird's-eye bands follow the generalised lines like the plan-view map's."""
+    from sciviz_gbuf.datasets import load_jacksboro_dem
+
+    gb = birdseye_gbuffer(load_jacksboro_dem(), size=480, supersample=1)
+
+    def islands(generalize: bool) -> int:
+        lay = birdseye_layers(gb, contours=False, generalize=generalize)
+        rgba = np.dstack([np.round(lay["bands"] * 255), np.where(lay["alpha"] >= 1.0, 255, 0)])
+        return colour_islands(rgba.astype(np.uint8))
+
+    assert islands(True) == 0
+    assert islands(False) > 10
