@@ -4,11 +4,14 @@ For each PNG of a demo run (``sciviz-gbuf demo``; run here into a temporary fold
 ``--demo DIR`` names one) it prints, in one markdown table:
 
 - ``specks/1000``: isolated ink components (8-connected groups of dark pixels of at most
-  ``--speck`` = 4 px) per 1000 ink pixels. Ink is what is thin and dark: luminance at least
-  0.2 below the 7x7 grey closing of the picture (a black top-hat), so a line drawing's stray
-  dots and a map's contour speckle count, but the shading and colour bands of a coloured
-  picture do not. A colour bar strip below the picture (``compose.with_colorbar``: found by
-  its black frame) is cut off first: its tick labels are text, not specks.
+  ``--speck`` = 4 px) per 1000 ink pixels. Ink is luminance < 0.45 on the picture's own
+  background, so a line drawing's stray dots and a map's contour speckle both count (and, on
+  coloured maps, dark bits of relief shading: the maps' contour specks proper are measured
+  below, without bands and relief). Pictures with under 300 ink px get no rate (``-``: a few
+  dark pixels of a colour-mapped G-buffer make no speckle figure). A colour bar strip below
+  the picture (``compose.with_colorbar``: found by its black frame) is cut off first: its
+  tick labels are text, not specks. (A black top-hat, ink as what is thin and dark, was
+  tried: it breaks outlines that run beside dark faces into false specks.)
 - ``black %``: the largest solid-black area (8-connected content pixels of luminance < 0.1,
   after an opening of 3x3 so that lines and outlines do not count) as a percentage of the
   content pixels.
@@ -59,6 +62,8 @@ GDAL_INTERVALS = {
     "N10W110.hgt": 1.0,
 }
 EIGHT = np.ones((3, 3), bool)
+#: Fewest ink pixels for a speck rate.
+MIN_INK = 300
 
 
 def load_rgb(path: Path) -> np.ndarray:
@@ -115,8 +120,7 @@ def audit_png(path: Path, speck: int) -> dict[str, float]:
     bg = background(rgb)
     content = np.abs(rgb - bg).max(axis=2) > 0.08
     lum = luminance(rgb)
-    # thin and dark: a black top-hat, so broad shading and dark bands are not ink
-    ink = content & (ndimage.grey_closing(lum, size=(7, 7)) - lum > 0.2)
+    ink = content & (lum < 0.45)
     n_ink, per_k = specks(ink, speck)
     # only content: a black background (depth, mask images) is not a black blob
     black = ndimage.binary_opening(content & (lum < 0.1), structure=np.ones((3, 3), bool))
@@ -213,6 +217,8 @@ def main(argv: list[str] | None = None) -> int:
                 continue  # tiles of the pictures above
             m = audit_png(png, args.speck)
             cells = [f"{m[k]:.0f}" if k == "ink px" else f"{m[k]:.1f}" for k in keys]
+            if m["ink px"] < MIN_INK:
+                cells[1] = "-"
             print(f"| {png.name} | " + " | ".join(cells) + " |")
         if args.skip_dems or not SHARED.is_dir():
             return 0
