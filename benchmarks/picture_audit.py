@@ -5,12 +5,13 @@ For each PNG of a demo run (``sciviz-gbuf demo``; run here into a temporary fold
 
 - ``specks/1000``: isolated ink components (8-connected groups of dark pixels of at most
   ``--speck`` = 4 px) per 1000 ink pixels. Ink is luminance < 0.45 on the picture's own
-  background, so a line drawing's stray dots and a map's contour speckle both count (and, on
-  coloured maps, dark bits of relief shading: the maps' contour specks proper are measured
-  below, without bands and relief). Pictures with under 300 ink px get no rate (``-``: a few
-  dark pixels of a colour-mapped G-buffer make no speckle figure). A colour bar strip below
-  the picture (``compose.with_colorbar``: found by its black frame) is cut off first: its
-  tick labels are text, not specks. (A black top-hat, ink as what is thin and dark, was
+  background with hysteresis (the pixels darker than 0.6 joined to it: a brown line whose
+  antialiased luminance hovers about 0.45 over bright bands is one line, not dots), so a line
+  drawing's stray dots and a map's contour speckle both count (the maps' contour specks proper
+  are measured below, without bands and relief). Under 300 ink px there is no rate (``-``: a
+  few dark pixels of a colour-mapped G-buffer make no speckle figure). A colour bar strip
+  below the picture (``compose.with_colorbar``, found by its black frame) is cut off first:
+  its tick labels are text, not specks. (A black top-hat, ink as what is thin and dark, was
   tried: it breaks outlines that run beside dark faces into false specks.)
 - ``black %``: the largest solid-black area (8-connected content pixels of luminance < 0.1,
   after an opening of 3x3 so that lines and outlines do not count) as a percentage of the
@@ -120,7 +121,15 @@ def audit_png(path: Path, speck: int) -> dict[str, float]:
     bg = background(rgb)
     content = np.abs(rgb - bg).max(axis=2) > 0.08
     lum = luminance(rgb)
-    ink = content & (lum < 0.45)
+    # hysteresis: dark pixels (< 0.45) and the pixels darker than 0.6 joined to them, so an
+    # antialiased line whose luminance hovers about 0.45 (brown lines over bright bands) is one
+    # line, not a row of dots
+    low = content & (lum < 0.6)
+    labels, _ = ndimage.label(low, structure=EIGHT)
+    keep = np.zeros(labels.max() + 1, bool)
+    keep[np.unique(labels[low & (lum < 0.45)])] = True
+    keep[0] = False
+    ink = keep[labels]
     n_ink, per_k = specks(ink, speck)
     # only content: a black background (depth, mask images) is not a black blob
     black = ndimage.binary_opening(content & (lum < 0.1), structure=np.ones((3, 3), bool))
