@@ -74,6 +74,10 @@ OTHER_FILTERS = {
         None,
     ),
     "fill_nodata_ring": (lambda gb, **kw: F.fill_nodata_ring(FIELD, **kw), (N, N)),
+    "band_heights": (
+        lambda gb, **kw: F.band_heights(FIELD, **({"band_interval": 2.0} | kw)),
+        (N, N),
+    ),
     "highlight_lines": (lambda gb, **kw: F.highlight_lines(gb, **kw), "gb"),
     "polylines_to_geojson": (lambda gb, **kw: F.polylines_to_geojson([], **kw), None),
 }
