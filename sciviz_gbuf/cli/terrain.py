@@ -192,6 +192,7 @@ def _chunks_arg(text: str) -> tuple[int, int]:
 def _topo_options(args: argparse.Namespace, show: bool) -> dict:
     return {
         **_contour_options(args.contours),
+        "generalize": not args.exact_contours,
         "width": args.width,
         "major_width": args.major_width,
         "bands": args.bands,
@@ -369,6 +370,7 @@ def _cmd_birdseye(args: argparse.Namespace) -> int:
         panels = birdseye_panels(
             gb,
             **_contour_options(args.contours),
+            generalize=not args.exact_contours,
             bands=args.bands,
             cmap=args.cmap,
             sea_level=args.sea_level,
@@ -423,6 +425,12 @@ def _add_map_style(p: argparse.ArgumentParser, *, tiles: bool = False) -> None:
         metavar="MINOR,MAJOR",
         help="contour intervals in height units, e.g. 20,100; one number is the major interval "
         "(minors at a fifth); 'none' draws none (default: about 8 round majors)",
+    )
+    p.add_argument(
+        "--exact-contours",
+        action="store_true",
+        help="draw the exact contour lines of the heights (those of gdal_contour) instead of "
+        "the generalised ones (smoothed within 0.6 px on gentle ground, small rings dropped)",
     )
     p.add_argument(
         "--bands",

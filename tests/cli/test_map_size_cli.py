@@ -97,3 +97,36 @@ def test_bad_values_exit_2_in_a_fresh_process(tmp_path, argv, message):
     last = r.stderr.strip().splitlines()[-1]
     assert message in last, r.stderr
     assert "Traceback" not in r.stderr
+
+
+@pytest.mark.parametrize("cmd", ["topo", "birdseye"])
+def test_exact_contours_flag_draws_the_exact_lines(cmd, tmp_path, shared_data):
+    """``--exact-contours``: the map of ``generalize=False``; the default is the generalised
+    map (on whole-metre SRTM heights the two differ)."""
+    import warnings
+
+    import sciviz_gbuf as sg
+    from sciviz_gbuf.readers import read_dem
+    from sciviz_gbuf.recipes import birdseye_gbuffer, birdseye_panels
+
+    src = shared_data / "dem" / "SRTMGL3_40.09_-105.55_40.21_-105.35.asc"
+    if not src.is_file():
+        pytest.skip(f"{src} not available")
+    extra = ["--size", "240x160", "--supersample", "1"] if cmd == "birdseye" else []
+    images = {}
+    for flag in ([], ["--exact-contours"]):
+        out = tmp_path / f"{cmd}{len(flag)}.png"
+        assert main([cmd, str(src), "-o", str(out), "--no-progress", *extra, *flag]) == 0
+        with Image.open(out) as im:
+            images[bool(flag)] = np.asarray(im.convert("RGBA"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        dem = read_dem(src)
+    if cmd == "topo":
+        want = {g: sg.topographic_map(dem, generalize=not g) for g in (False, True)}
+    else:
+        gb = birdseye_gbuffer(dem, size=(240, 160), supersample=1)
+        want = {g: birdseye_panels(gb, generalize=not g)["mx4"] for g in (False, True)}
+    for exact in (False, True):
+        np.testing.assert_array_equal(images[exact], want[exact])
+    assert not np.array_equal(images[True], images[False])
