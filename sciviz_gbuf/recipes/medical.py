@@ -320,9 +320,6 @@ def ct_layers(
         mask=valid,
         c_dense=0.0,
         dense_spacing=3.0 * contour_width * k,
-        # as on a map: where the lines crowd at the silhouette they fade as whole pieces,
-        # and the stubs and specks left of them go (the panel was strewn with dots)
-        generalize=True,
     )
     n = gb.normal
     sh = lambert(n, light=light, mask=valid)
