@@ -150,7 +150,7 @@ def _channel_images(g: GBuffer, scene: _Scene) -> list[tuple[str, str, np.ndarra
     u = scene.units
     out = [
         ("depth", CAPTIONS["depth"], _scalar_image(g.depth, "viridis", f"depth ({u})")),
-        ("sz", CAPTIONS["sz"], _scalar_image(g.sz, "viridis", "sz = d²/(w z) (px)")),
+        ("sz", CAPTIONS["sz"], _scalar_image(g.sz, "viridis", "sz = d^2/(w z) (px)")),
         ("normal", CAPTIONS["normal"], normals_to_rgb(g.normal)),
         (
             "shade",
