@@ -11,11 +11,8 @@ from __future__ import annotations
 
 import pytest
 
-import sciviz_gbuf as sg
 from sciviz_gbuf.recipes.medical import ct_surface
-from tests.filters.test_edges_acceptance import view
-from tests.filters.test_edges_organic import SIZE, VIEWS, _lines, specks_per_1000
-from tests.helpers.edge_truth import precision_recall, visible_edge_truth
+from tests.filters.test_edges_organic import VIEWS, assert_edges_match_truth
 
 
 @pytest.fixture(scope="module")
@@ -25,10 +22,4 @@ def phantom(shared_data):
 
 @pytest.mark.parametrize("azel", VIEWS, ids=[f"az{a:g}_el{e:g}" for a, e in VIEWS])
 def test_phantom_bone_edges_match_truth_without_specks(phantom, azel):
-    gb = sg.capture(phantom, window_size=SIZE, camera=view(phantom, *azel))
-    truth = visible_edge_truth(phantom, gb, feature_angle=30.0)["all"]
-    assert truth.sum() > 1000
-    ink = _lines(gb)
-    precision, recall = precision_recall(ink, truth, tol_px=1.5)
-    assert precision >= 0.95 and recall >= 0.95, (precision, recall)
-    assert specks_per_1000(ink) <= 2.0
+    assert_edges_match_truth(phantom, phantom, azel, min_truth=1000)
