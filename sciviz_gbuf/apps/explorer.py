@@ -33,7 +33,14 @@ from ..errors import InputError
 from ..filters import color_bands, contour_lines, edge_map
 from ..readers import DEM, kind_of, read_dem, read_scene, suffixes
 from ..recipes.medical import ct_surface
-from ..recipes.terrain import CONTOUR_COLOR, composite, contour_intervals, map_grid, map_layers
+from ..recipes.terrain import (
+    CONTOUR_COLOR,
+    composite,
+    contour_intervals,
+    map_grid,
+    map_layers,
+    map_min_ring,
+)
 from ..styles import check_style, gooch, hatch, styles_for, toon
 from ..styles.fused import FUSED_CONSTANTS, fused_style, rgba_on_paper
 from ..styles.illustration import (
@@ -570,9 +577,9 @@ class Explorer:
             layers["ink"] = self._layer(key, lambda: part(contours=True)["ink"], cache)
         if kw["bands"] is not False:
             b = kw["bands"]
-            # the band islands filled are the rings the lines drop: up to 3 widest widths
-            widest = max(kw["width"], kw["major_width"] if kw["major_interval"] else 0.0)
-            key = ("map_bands", b if isinstance(b, str) else tuple(b), widest)
+            # the band islands filled are the rings the lines drop
+            ring = map_min_ring(kw["width"], kw["major_width"], kw["major_interval"])
+            key = ("map_bands", b if isinstance(b, str) else tuple(b), ring)
             bl = self._layer(key, lambda: part(bands=b), cache)
             layers["tables"] = bl["tables"]
             if bl.get("band_z") is not None:

@@ -210,6 +210,14 @@ def tolerance_band(z: np.ndarray, valid: np.ndarray, r: float) -> tuple[np.ndarr
     return lo, hi
 
 
+def cut_cells(valid: np.ndarray) -> np.ndarray:
+    """Cells where a piece counts as cut short rather than closed: the grid's edge and the
+    cells next to one that is not ``valid`` (8-connected)."""
+    cut = ndimage.binary_dilation(~valid, structure=np.ones((3, 3), bool))
+    cut[0, :] = cut[-1, :] = cut[:, 0] = cut[:, -1] = True
+    return cut
+
+
 def drop_small_rings(
     ink: np.ndarray, min_ring: float, valid: np.ndarray, min_stub: float
 ) -> np.ndarray:
@@ -228,9 +236,7 @@ def drop_small_rings(
     if min_ring <= 0:
         return ink
     ink = np.ascontiguousarray(ink, np.float32)
-    eight = np.ones((3, 3), bool)
-    cut = ndimage.binary_dilation(~valid, structure=eight)
-    cut[0, :] = cut[-1, :] = cut[:, 0] = cut[:, -1] = True
+    cut = cut_cells(valid)
     h = ink.shape[0]
     margin = math.ceil(min_ring) + 1
     if h <= STRIP_ROWS + 2 * margin:
@@ -275,8 +281,7 @@ def band_heights(z: np.ndarray, valid: np.ndarray, band_index, min_ring: float) 
         return s
     band = np.where(valid, band_index(np.where(valid, s, 0.0)), np.iinfo(np.int64).min)
     eight = np.ones((3, 3), bool)
-    cut = ndimage.binary_dilation(~valid, structure=eight)
-    cut[0, :] = cut[-1, :] = cut[:, 0] = cut[:, -1] = True
+    cut = cut_cells(valid)
     small = np.zeros(s.shape, bool)
     for v in np.unique(band[valid]):
         labels, _ = ndimage.label(band == v, structure=eight)

@@ -42,6 +42,7 @@ __all__ = [
     "map_contour_halo",
     "map_contours",
     "map_layers",
+    "map_min_ring",
     "relief_light",
     "relief_z_factor",
     "rgba",
@@ -259,13 +260,19 @@ def map_band_heights(
     opts = check_bands(bands, band_interval)
     if not opts:
         return None
-    widest = max(width, major_width) if major_interval is not None else width
     return band_heights(
         z,
         band_interval=opts.get("interval"),
         band_levels=opts.get("levels"),
-        min_ring=MIN_RING_WIDTHS * float(widest),
+        min_ring=map_min_ring(width, major_width, major_interval),
     )
+
+
+def map_min_ring(width: float, major_width: float, major_interval: float | None) -> float:
+    """The largest ring (px) a generalised map's lines drop, and so the largest band island
+    filled: ``contour_lines``' default, 3 widths of the widest line (majors only if any)."""
+    widest = max(width, major_width) if major_interval is not None else width
+    return MIN_RING_WIDTHS * float(widest)
 
 
 def map_contours(

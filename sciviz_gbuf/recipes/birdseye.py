@@ -23,7 +23,6 @@ from ..core.framing import terrain_birdseye_camera
 from ..core.gbuffer import GBuffer
 from ..errors import InputError
 from ..filters import band_heights, color_bands, contour_lines, lambert, profile_edges
-from ..filters.contours import MIN_RING_WIDTHS
 from ..readers import DEM
 from ._intervals import contour_intervals
 from ._map import (
@@ -33,6 +32,7 @@ from ._map import (
     check_line_sizes,
     check_z_factor,
     lit,
+    map_min_ring,
     relief_light,
     relief_z_factor,
     rgba,
@@ -273,10 +273,9 @@ def birdseye_layers(
         band_z = elev
         if generalize and opts:
             # no island of band colour where the generalised lines dropped a ring
-            widest = max(width, major_width) if major_interval is not None else width
             band_z = band_heights(
                 elev, band_interval=opts.get("interval"), band_levels=opts.get("levels"),
-                min_ring=MIN_RING_WIDTHS * widest * k,
+                min_ring=map_min_ring(width, major_width, major_interval) * k,
             )  # fmt: skip
         rgb = color_bands(
             band_z,

@@ -29,6 +29,7 @@ from ._map import (
     check_z_factor,
     composite,
     map_layers,
+    map_min_ring,
 )
 from ._resample import check_size_options, map_grid, resample_heights
 from .terrain_chunked import lazy_topographic_map
@@ -40,6 +41,7 @@ __all__ = [
     "contour_intervals",
     "map_grid",
     "map_layers",
+    "map_min_ring",
     "nice_intervals",
     "resample_heights",
     "topographic_map",
