@@ -17,7 +17,16 @@ import math
 import numpy as np
 from numba import njit, prange
 
-__all__ = ["edge_map_kernel", "id_edge_kernel", "pair_edge_kernel"]
+__all__ = [
+    "MODE_C1",
+    "MODE_DIAGONAL",
+    "MODE_PAIRS",
+    "edge_map_finish",
+    "edge_map_kernel",
+    "edge_pass",
+    "id_edge_kernel",
+    "pair_edge_kernel",
+]
 
 # The four 4-neighbour directions (dr, dc): right, left, down, up.
 _DR4 = np.array([0, 0, 1, -1], dtype=np.int64)
@@ -499,3 +508,360 @@ def edge_map_kernel(sz, depth, normal, m, parallel, inv_d, jump, crease, soft, u
                 out[r, c, 2] = inner
                 out[r, c, 3] = prof
             up, cur = cur, up
+
+
+# --------------------------------------------------------------------------- the fused pass
+#
+# ``edge_pass`` computes what ``pair_edge_kernel`` and ``edge_map_kernel`` compute, bit for bit,
+# in one traversal and much faster. The speed comes from three things:
+#
+# - every pair's unexplained jump (4-neighbour and diagonal) is computed once, into row buffers
+#   that both the pair classification and the 2003 operators read;
+# - the depth-crease test, which needs the eye-space positions of four pixels per pair, reads
+#   them from a ring of per-row eye positions (each position computed once, not ~8 times) and
+#   runs the full :func:`_depth_crease` only for the few pairs whose section turn can reach the
+#   threshold (the same floating-point test it starts with, so the same pairs pass);
+# - spans of background (columns and rows with no covered pixel within two pixels) are skipped:
+#   every output there is 0.
+
+# Pair kinds of the row buffers, from (r, c) to: (r + 1, c - 1), (r + 1, c), (r + 1, c + 1),
+# (r, c + 1); index c + 1 (columns 0 and w + 1 stand for pairs outside the image).
+_KIND_DR = np.array([1, 1, 1, 0], dtype=np.int64)
+_KIND_DC = np.array([-1, 0, 1, 1], dtype=np.int64)
+#: Modes of :func:`edge_pass`.
+MODE_PAIRS = 0
+MODE_DIAGONAL = 1
+MODE_C1 = 2
+
+
+@njit(parallel=True, cache=True)
+def _valid_spans(sz, m, lo, hi):
+    """``lo[r]`` / ``hi[r]``: first / last valid column of row r (``w`` / ``-1`` if none)."""
+    h, w = sz.shape
+    for r in prange(h):
+        r = np.int64(r)
+        a = w
+        for c in range(w):
+            if _valid(sz, m, r, c):
+                a = c
+                break
+        b = np.int64(-1)
+        for c in range(w - 1, a - 1, -1):
+            if _valid(sz, m, r, c):
+                b = c
+                break
+        lo[r] = a
+        hi[r] = b
+
+
+@njit(cache=True)
+def _ring_fill(sz, depth, m, row, a, b, h, w, parallel, inv_d, inv_w, eyes, S, D, V, EX, EY, EZ):
+    """Ring slot ``row & 3`` of the row buffers over columns ``[a, b)`` (index ``c + 2``):
+    ``S`` = sz and ``D`` = depth as float64, ``V`` = validity (:func:`_valid`) and, if
+    ``eyes``, the eye-space positions (:func:`_eye`). Two columns on either side of the span
+    (and rows outside the image) are invalid."""
+    s = row & 3
+    for i in (a, a + 1, b + 2, b + 3):
+        V[s, i] = False
+        S[s, i] = 0.0
+        D[s, i] = 0.0
+    if row < 0 or row >= h:
+        for c in range(a, b):
+            V[s, c + 2] = False
+            S[s, c + 2] = 0.0
+            D[s, c + 2] = 0.0
+        return
+    for c in range(a, b):
+        v = sz[row, c]
+        V[s, c + 2] = m[row, c] and (v - v == 0.0)
+        S[s, c + 2] = np.float64(v)
+        D[s, c + 2] = np.float64(depth[row, c])
+    if eyes:
+        for c in range(a, b):
+            x, y, z = _eye(depth, row, c, h, w, parallel, inv_d, inv_w)
+            EX[s, c + 2] = x
+            EY[s, c + 2] = y
+            EZ[s, c + 2] = z
+
+
+@njit(cache=True)
+def _pair_rows(S, D, V, r, a, b, h, w, parallel, inv_d, jump, gap, pj):
+    """Row buffers of the pairs from row ``r``, columns ``[a, b)``, from the ring buffers:
+    ``gap[k, c + 1]`` the unexplained jump (:func:`_pair_gap`, same arithmetic) where both
+    pixels are valid (else 0), ``pj[k, c + 1]`` the 2003 jump strength (:func:`_pair_jump`);
+    the columns just outside the span are 0. Written without branches, so it vectorises."""
+    for k in range(4):
+        gap[k, a] = 0.0
+        gap[k, b + 1] = 0.0
+        pj[k, a] = 0.0
+        pj[k, b + 1] = 0.0
+        dr = 1 if k < 3 else 0
+        dc = k - 1 if k < 3 else 1
+        if r < 0 or r + dr >= h:
+            for c in range(a, b):
+                gap[k, c + 1] = 0.0
+                pj[k, c + 1] = 0.0
+            continue
+        sx, sy, sm, sp = r & 3, (r + dr) & 3, (r - dr) & 3, (r + 2 * dr) & 3
+        for c in range(a, b):
+            cx = c + 2
+            cy = cx + dc
+            vx = V[sx, cx]
+            vy = V[sy, cy]
+            ok = vx and vy and V[sm, cx - dc] and V[sp, cy + dc]
+            x = S[sx, cx]
+            y = S[sy, cy]
+            jmp = y - x
+            s_l = x - S[sm, cx - dc]
+            s_r = S[sp, cy + dc] - y
+            lo = min(s_l, s_r)
+            hi = max(s_l, s_r)
+            g = max(lo - jmp, jmp - hi)
+            scale = 1.0 if parallel else min(D[sx, cx], D[sy, cy]) * inv_d
+            sl = min(abs(s_l), abs(s_r)) * scale
+            val = g * scale / math.sqrt(1.0 + sl * sl)
+            gg = val if (ok and g > 0.0) else 0.0
+            gap[k, c + 1] = gg
+            t = min(1.0, max(0.0, (gg - jump) / jump))
+            pj[k, c + 1] = t if (vx and vy) else (1.0 if vx != vy else 0.0)
+        # A pair leaving the image sideways is no pair (the border is not an edge).
+        if dc < 0 and a == 0:
+            pj[k, 1] = 0.0
+        if dc > 0 and b == w:
+            pj[k, w] = 0.0
+
+
+@njit(inline="always", cache=True)
+def _section_may_turn(V, r, c, dr, dc, EX, EY, EZ, cos_min):
+    """The first test of :func:`_depth_crease` on the ring buffers: True unless the pair
+    (r, c) -> (r + dr, c + dc) certainly has no depth crease."""
+    s0, s1, s2, s3 = (r - dr) & 3, r & 3, (r + dr) & 3, (r + 2 * dr) & 3
+    i0, i1, i2, i3 = c - dc + 2, c + 2, c + dc + 2, c + 2 * dc + 2
+    if not (V[s0, i0] and V[s3, i3]):
+        return False
+    ax = EX[s1, i1] - EX[s0, i0]
+    ay = EY[s1, i1] - EY[s0, i0]
+    az = EZ[s1, i1] - EZ[s0, i0]
+    bx = EX[s3, i3] - EX[s2, i2]
+    by = EY[s3, i3] - EY[s2, i2]
+    bz = EZ[s3, i3] - EZ[s2, i2]
+    dot = ax * bx + ay * by + az * bz
+    norms = math.sqrt((ax * ax + ay * ay + az * az) * (bx * bx + by * by + bz * bz))
+    return not (dot >= cos_min * norms)
+
+
+@njit(cache=True)
+def _pair_crease(sz, depth, normal, m, r, c, dr, dc, h, w, parallel, inv_d, inv_w, jump,
+                 crease, soft, cos_min, cos_skip, may_turn):
+    """(ink, sign) of the crease of the pair (r, c) -> (r + dr, c + dc), as in
+    :func:`pair_edge_kernel`; ``may_turn`` is :func:`_section_may_turn` of the pair."""
+    r2, c2 = r + dr, c + dc
+    geo = 0.0
+    if may_turn:
+        geo = _depth_crease(
+            sz, depth, m, r, c, dr, dc, h, w, parallel, inv_d, inv_w, jump, cos_min
+        )
+    d = _dot(normal, r, c, r2, c2)
+    if geo == 0.0 and d >= cos_skip:
+        return 0.0, 1.0
+    ang = math.degrees(math.acos(min(1.0, max(-1.0, np.float64(d)))))
+    if ang > abs(geo) and ang > crease:
+        ang = _normal_flanks(sz, depth, normal, m, r, c, dr, dc, parallel, inv_d, jump, ang)
+    if ang > abs(geo):
+        x1, y1, z1 = _eye(depth, r, c, h, w, parallel, inv_d, inv_w)
+        x2, y2, z2 = _eye(depth, r2, c2, h, w, parallel, inv_d, inv_w)
+        s = (
+            (normal[r2, c2, 0] - normal[r, c, 0]) * (x2 - x1)
+            + (normal[r2, c2, 1] - normal[r, c, 1]) * (y2 - y1)
+            + (normal[r2, c2, 2] - normal[r, c, 2]) * (z2 - z1)
+        )
+        geo = ang if s >= 0.0 else -ang
+    return _ramp(abs(geo), crease, soft), geo
+
+
+@njit(parallel=True, cache=True)
+def edge_pass(
+    sz,
+    depth,
+    normal,
+    m,
+    parallel,
+    inv_d,
+    inv_w,
+    jump,
+    crease,
+    soft,
+    do_crease,
+    mode,
+    out_a,
+    out_b,
+):
+    """Profile and crease ink of :func:`pair_edge_kernel` (``mode`` 0: ``out_a`` = profile,
+    ``out_b`` = signed crease), or the one-pixel 2003 edge map of :func:`edge_map_kernel`
+    with the depth's creases added to its inner edges (``mode`` 1 diagonal, 2 C1: ``out_a``
+    = ``max(inner, |crease|)``, ``out_b`` = profile), in one pass (see the section comment).
+    """
+    h, w = sz.shape
+    cos_min = math.cos(math.radians(crease))
+    cos_skip = cos_min + _COS_MARGIN
+    lo = np.empty(h, dtype=np.int64)
+    hi = np.empty(h, dtype=np.int64)
+    _valid_spans(sz, m, lo, hi)
+    for t in prange((h + _ROWS - 1) // _ROWS):
+        r0 = np.int64(t) * _ROWS
+        r1 = min(h, r0 + _ROWS)
+        # The task's span: columns within two pixels of a valid one in rows r0 - 2 .. r1 + 1.
+        a = w
+        b = np.int64(0)
+        for r in range(max(0, r0 - 2), min(h, r1 + 2)):
+            a = min(a, lo[r])
+            b = max(b, hi[r] + 1)
+        if a >= b:
+            a = b = 0
+        else:
+            a = max(0, a - 2)
+            b = min(w, b + 2)
+        for r in range(r0, r1):
+            for c in range(a):
+                out_a[r, c] = 0.0
+                out_b[r, c] = 0.0
+            for c in range(b, w):
+                out_a[r, c] = 0.0
+                out_b[r, c] = 0.0
+        if a >= b:
+            continue
+        up_g = np.empty((4, w + 2), dtype=np.float64)
+        up_j = np.empty((4, w + 2), dtype=np.float64)
+        cur_g = np.empty((4, w + 2), dtype=np.float64)
+        cur_j = np.empty((4, w + 2), dtype=np.float64)
+        S = np.empty((4, w + 4), dtype=np.float64)
+        D = np.empty((4, w + 4), dtype=np.float64)
+        V = np.empty((4, w + 4), dtype=np.bool_)
+        EX = np.empty((4, w + 4), dtype=np.float64)
+        EY = np.empty((4, w + 4), dtype=np.float64)
+        EZ = np.empty((4, w + 4), dtype=np.float64)
+        for r in range(r0 - 2, r0 + 2):
+            _ring_fill(
+                sz, depth, m, r, a, b, h, w, parallel, inv_d, inv_w, do_crease, S, D, V, EX, EY, EZ
+            )
+        _pair_rows(S, D, V, r0 - 1, a, b, h, w, parallel, inv_d, jump, up_g, up_j)
+        for r in range(r0, r1):
+            _ring_fill(
+                sz, depth, m, r + 2, a, b, h, w, parallel, inv_d, inv_w, do_crease, S, D, V, EX, EY, EZ
+            )
+            _pair_rows(S, D, V, r, a, b, h, w, parallel, inv_d, jump, cur_g, cur_j)
+            s_up, s_r, s_dn = (r - 1) & 3, r & 3, (r + 1) & 3
+            for c in range(a, b):
+                i = c + 2
+                valid = V[s_r, i]
+                prof = 0.0
+                best = 0.0
+                if valid:
+                    for k in range(4):
+                        dr, dc = _DR4[k], _DC4[k]
+                        r2, c2 = r + dr, c + dc
+                        if not (r2 >= 0 and r2 < h and c2 >= 0 and c2 < w):
+                            continue
+                        s2 = s_r if k < 2 else (s_dn if k == 2 else s_up)
+                        if not V[s2, i + dc]:
+                            prof = 1.0
+                            continue
+                        if k == 0:
+                            g = cur_g[3, c + 1]
+                        elif k == 1:
+                            g = cur_g[3, c]
+                        elif k == 2:
+                            g = cur_g[1, c + 1]
+                        else:
+                            g = up_g[1, c + 1]
+                        if S[s_r, i] > S[s2, i + dc]:
+                            prof = max(prof, _ramp(g, jump, jump))
+                        if k == 1 or k == 3 or g > jump or not do_crease:
+                            continue
+                        may = _section_may_turn(V, r, c, dr, dc, EX, EY, EZ, cos_min)
+                        if not may and _dot(normal, r, c, r2, c2) >= cos_skip:
+                            continue
+                        ink, geo = _pair_crease(
+                            sz, depth, normal, m, r, c, dr, dc, h, w, parallel, inv_d,
+                            inv_w, jump, crease, soft, cos_min, cos_skip, may,
+                        )
+                        if ink > abs(best):
+                            best = ink if geo >= 0.0 else -ink
+                cre = best if prof < 1.0 else 0.0
+                if mode == MODE_PAIRS:
+                    out_a[r, c] = prof
+                    out_b[r, c] = cre
+                    continue
+                inner = 0.0
+                if valid:
+                    cmin = 1.0
+                    for dc in range(-1, 2, 2):
+                        ra, ca, rb, cb = r - 1, c + dc, r + 1, c - dc
+                        if V[s_up, ca + 2] and V[s_dn, cb + 2]:
+                            cmin = min(cmin, np.float64(_dot(normal, ra, ca, rb, cb)))
+                    if not cmin >= cos_skip:
+                        ang = math.degrees(math.acos(min(1.0, max(-1.0, cmin))))
+                        inner = _ramp(ang, crease, soft)
+                if mode == MODE_C1:
+                    total = 0.0
+                    total += 1.0 * up_j[2, c]
+                    total += 2.0 * up_j[1, c + 1]
+                    total += 1.0 * up_j[0, c + 2]
+                    total += 2.0 * cur_j[3, c]
+                    total += 2.0 * cur_j[3, c + 1]
+                    total += 1.0 * cur_j[0, c + 1]
+                    total += 2.0 * cur_j[1, c + 1]
+                    total += 1.0 * cur_j[2, c + 1]
+                    em_prof = min(1.0, 2.0 * total / 8.0)
+                else:
+                    iz = 1.0
+                    for i in range(2):
+                        if i == 0:
+                            jj = 2.0 * max(up_j[2, c], cur_j[2, c + 1])
+                        else:
+                            jj = 2.0 * max(up_j[0, c + 2], cur_j[0, c + 1])
+                        s = 1.0 - 0.5 * jj
+                        iz *= s * s
+                    em_prof = 1.0 - iz
+                # np.maximum of the float32 images, NaN kept.
+                fi = np.float32(inner)
+                fc = np.float32(abs(np.float32(cre)))
+                if fi != fi or fc != fc:
+                    out_a[r, c] = np.float32(np.nan)
+                else:
+                    out_a[r, c] = fi if fi >= fc else fc
+                out_b[r, c] = em_prof
+            up_g, cur_g = cur_g, up_g
+            up_j, cur_j = cur_j, up_j
+
+
+@njit(parallel=True, cache=True)
+def edge_map_finish(inner, alpha, k, out):
+    """``out`` (h, w, 4): the ``k x k`` block means of ``inner`` (into R, G, B) and ``alpha``
+    (into A), NaN samples left out as in ``GBuffer.downsample``, clipped to [0, 1]: the
+    downsample, stack and clip of the edge map in one pass."""
+    oh, ow = out.shape[0], out.shape[1]
+    for r in prange(oh):
+        r = np.int64(r)
+        for col in range(ow):
+            for ch in range(2):
+                src = inner if ch == 0 else alpha
+                total = 0.0
+                n = 0
+                for i in range(r * k, r * k + k):
+                    for j in range(col * k, col * k + k):
+                        v = src[i, j]
+                        if not np.isnan(v):
+                            total += v
+                            n += 1
+                v = np.float32(total / n) if n > 0 else np.float32(np.nan)
+                if v < 0.0:
+                    v = np.float32(0.0)
+                elif v > 1.0:
+                    v = np.float32(1.0)
+                if ch == 0:
+                    out[r, col, 0] = v
+                    out[r, col, 1] = v
+                    out[r, col, 2] = v
+                else:
+                    out[r, col, 3] = v

@@ -101,7 +101,7 @@ def _pair_edges(gb: GBuffer, depth_jump: float, crease_angle: float, creases: bo
     h, w = gb.shape
     profile = np.empty((h, w), dtype=np.float32)
     crease = np.empty((h, w), dtype=np.float32)
-    _k.pair_edge_kernel(
+    _k.edge_pass(
         *_kernel_inputs(gb),
         parallel,
         inv_d,
@@ -110,6 +110,7 @@ def _pair_edges(gb: GBuffer, depth_jump: float, crease_angle: float, creases: bo
         float(crease_angle),
         0.5 * float(crease_angle),
         bool(creases),
+        _k.MODE_PAIRS,
         profile,
         crease,
     )
@@ -395,28 +396,32 @@ def edge_map(
     gb = _check_gb(gb)
     _check_params(depth_jump, crease_angle, width)
     operator = _validate.choice(operator, "operator", ("diagonal", "c1"))
-    parallel, inv_d, _ = _camera_terms(gb)
+    parallel, inv_d, inv_w = _camera_terms(gb)
     h, w = gb.shape
-    out = np.empty((h, w, 4), dtype=np.float32)
-    _k.edge_map_kernel(
+    # One pass: the 2003 inner edges with the depth's own creases added (data whose normals
+    # are smoothed across real creases), and the 2003 profile, as two planar images.
+    inner = np.empty((h, w), dtype=np.float32)
+    alpha = np.empty((h, w), dtype=np.float32)
+    _k.edge_pass(
         *_kernel_inputs(gb),
         parallel,
         inv_d,
+        inv_w,
         float(depth_jump),
         float(crease_angle),
         0.5 * float(crease_angle),
-        operator == "c1",
-        out,
+        True,
+        _k.MODE_C1 if operator == "c1" else _k.MODE_DIAGONAL,
+        inner,
+        alpha,
     )
-    # Data whose normals are smoothed across real creases: add the depth's own creases.
-    _, crease = _pair_edges(gb, depth_jump, crease_angle)
-    inner = np.maximum(out[..., 0], np.abs(crease))
     # The 2003 lines already straddle the edge (two buffer pixels): dilate by one pixel less.
     size = max(1, round(width * gb.supersample) - 1)
-    inner, alpha = _finish(gb, inner, out[..., 3], width=size / gb.supersample)
-    res = np.empty((*inner.shape, 4), dtype=np.float32)
-    res[..., :3] = inner[..., None]
-    res[..., 3] = alpha
+    if size > 1:
+        inner, alpha = _dilate(inner, size), _dilate(alpha, size)
+    k = _validate.count(gb.supersample, "gb.supersample", "supersample")
+    res = np.empty((*gb.output_shape, 4), dtype=np.float32)
+    _k.edge_map_finish(inner, alpha, k, res)
     return res
 
 
