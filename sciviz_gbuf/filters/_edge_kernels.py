@@ -584,12 +584,51 @@ def _ring_fill(sz, depth, m, row, a, b, h, w, parallel, inv_d, inv_w, eyes, S, D
             EZ[s, c + 2] = z
 
 
+@njit(cache=True, error_model="numpy")
+def _kind_row(Sx, Sy, Sm, Sp, Vx, Vy, Vm, Vp, Dx, Dy, n, parallel, inv_d, jump, gap, pj):
+    """One kind of :func:`_pair_rows`: ``n`` pairs from ``X = Sx[i]`` to ``Y = Sy[i]``, the
+    one-sided slopes from ``Sm[i]`` (before X) and ``Sp[i]`` (after Y); the views start at
+    the span, so every index is the loop's own (no negative-index wraparound: vectorised).
+
+    Every use of a jump ``g`` (``g > jump`` and ``_ramp(g, jump, jump)``) is the same for all
+    ``g <= jump``, and ``_pair_gap`` is ``G / sqrt(1 + s^2) <= G`` with ``G = gap * scale``
+    (IEEE division by a number >= 1 never rounds above the dividend). So a first loop, without
+    branches, stores ``G``; the root and the division are taken only where ``G > jump``, in a
+    second loop over the few such pairs, with ``_pair_gap``'s arithmetic.
+    """
+    for i in range(n):
+        vx = Vx[i]
+        vy = Vy[i]
+        ok = vx & vy & Vm[i] & Vp[i]
+        x = Sx[i]
+        y = Sy[i]
+        jmp = y - x
+        s_l = x - Sm[i]
+        s_r = Sp[i] - y
+        g = max(min(s_l, s_r) - jmp, jmp - max(s_l, s_r))
+        scale = 1.0 if parallel else min(Dx[i], Dy[i]) * inv_d
+        gap[i] = g * scale if (ok & (g > 0.0)) else 0.0
+        pj[i] = 1.0 if vx != vy else 0.0
+    for i in range(n):
+        if not gap[i] > jump:
+            continue
+        x = Sx[i]
+        y = Sy[i]
+        s_l = x - Sm[i]
+        s_r = Sp[i] - y
+        scale = 1.0 if parallel else min(Dx[i], Dy[i]) * inv_d
+        sl = min(abs(s_l), abs(s_r)) * scale
+        gg = gap[i] / math.sqrt(1.0 + sl * sl)
+        gap[i] = gg
+        pj[i] = _ramp(gg, jump, jump)
+
+
 @njit(cache=True)
 def _pair_rows(S, D, V, r, a, b, h, w, parallel, inv_d, jump, gap, pj):
     """Row buffers of the pairs from row ``r``, columns ``[a, b)``, from the ring buffers:
     ``gap[k, c + 1]`` the unexplained jump (:func:`_pair_gap`, same arithmetic) where both
-    pixels are valid (else 0), ``pj[k, c + 1]`` the 2003 jump strength (:func:`_pair_jump`);
-    the columns just outside the span are 0. Written without branches, so it vectorises."""
+    pixels are valid and it exceeds ``jump`` (else a number <= ``jump``), ``pj[k, c + 1]`` the 2003 jump strength (:func:`_pair_jump`);
+    the columns just outside the span are 0."""
     for k in range(4):
         gap[k, a] = 0.0
         gap[k, b + 1] = 0.0
@@ -603,27 +642,12 @@ def _pair_rows(S, D, V, r, a, b, h, w, parallel, inv_d, jump, gap, pj):
                 pj[k, c + 1] = 0.0
             continue
         sx, sy, sm, sp = r & 3, (r + dr) & 3, (r - dr) & 3, (r + 2 * dr) & 3
-        for c in range(a, b):
-            cx = c + 2
-            cy = cx + dc
-            vx = V[sx, cx]
-            vy = V[sy, cy]
-            ok = vx and vy and V[sm, cx - dc] and V[sp, cy + dc]
-            x = S[sx, cx]
-            y = S[sy, cy]
-            jmp = y - x
-            s_l = x - S[sm, cx - dc]
-            s_r = S[sp, cy + dc] - y
-            lo = min(s_l, s_r)
-            hi = max(s_l, s_r)
-            g = max(lo - jmp, jmp - hi)
-            scale = 1.0 if parallel else min(D[sx, cx], D[sy, cy]) * inv_d
-            sl = min(abs(s_l), abs(s_r)) * scale
-            val = g * scale / math.sqrt(1.0 + sl * sl)
-            gg = val if (ok and g > 0.0) else 0.0
-            gap[k, c + 1] = gg
-            t = min(1.0, max(0.0, (gg - jump) / jump))
-            pj[k, c + 1] = t if (vx and vy) else (1.0 if vx != vy else 0.0)
+        o = a + 2  # ring index of column a
+        _kind_row(
+            S[sx, o:], S[sy, o + dc :], S[sm, o - dc :], S[sp, o + 2 * dc :],
+            V[sx, o:], V[sy, o + dc :], V[sm, o - dc :], V[sp, o + 2 * dc :],
+            D[sx, o:], D[sy, o + dc :], b - a, parallel, inv_d, jump, gap[k, a + 1 :], pj[k, a + 1 :],
+        )
         # A pair leaving the image sideways is no pair (the border is not an edge).
         if dc < 0 and a == 0:
             pj[k, 1] = 0.0
