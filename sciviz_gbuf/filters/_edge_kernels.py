@@ -655,30 +655,11 @@ def _pair_rows(S, D, V, r, a, b, h, w, parallel, inv_d, jump, gap, pj):
             pj[k, w] = 0.0
 
 
-@njit(inline="always", cache=True)
-def _section_may_turn(V, r, c, dr, dc, EX, EY, EZ, cos_min):
-    """The first test of :func:`_depth_crease` on the ring buffers: True unless the pair
-    (r, c) -> (r + dr, c + dc) certainly has no depth crease."""
-    s0, s1, s2, s3 = (r - dr) & 3, r & 3, (r + dr) & 3, (r + 2 * dr) & 3
-    i0, i1, i2, i3 = c - dc + 2, c + 2, c + dc + 2, c + 2 * dc + 2
-    if not (V[s0, i0] and V[s3, i3]):
-        return False
-    ax = EX[s1, i1] - EX[s0, i0]
-    ay = EY[s1, i1] - EY[s0, i0]
-    az = EZ[s1, i1] - EZ[s0, i0]
-    bx = EX[s3, i3] - EX[s2, i2]
-    by = EY[s3, i3] - EY[s2, i2]
-    bz = EZ[s3, i3] - EZ[s2, i2]
-    dot = ax * bx + ay * by + az * bz
-    norms = math.sqrt((ax * ax + ay * ay + az * az) * (bx * bx + by * by + bz * bz))
-    return not (dot >= cos_min * norms)
-
-
 @njit(cache=True)
 def _pair_crease(sz, depth, normal, m, r, c, dr, dc, h, w, parallel, inv_d, inv_w, jump,
                  crease, soft, cos_min, cos_skip, may_turn):
     """(ink, sign) of the crease of the pair (r, c) -> (r + dr, c + dc), as in
-    :func:`pair_edge_kernel`; ``may_turn`` is :func:`_section_may_turn` of the pair."""
+    :func:`pair_edge_kernel`; ``may_turn`` is :func:`_turn_row`'s test of the pair."""
     r2, c2 = r + dr, c + dc
     geo = 0.0
     if may_turn:
@@ -701,6 +682,76 @@ def _pair_crease(sz, depth, normal, m, r, c, dr, dc, h, w, parallel, inv_d, inv_
         )
         geo = ang if s >= 0.0 else -ang
     return _ramp(abs(geo), crease, soft), geo
+
+
+@njit(cache=True, error_model="numpy")
+def _profile_row(Vc, Vl, Vr, Vu, Vd, Sc, Sl, Sr, Su, Sd, gl, gr, gu, gd, n, ins, jump, prof):
+    """The profile ink of :func:`pair_edge_kernel` for ``n`` pixels of a row (views start at
+    the span): 1 next to an invalid neighbour inside the image, else the largest ramp of the
+    jumps towards farther neighbours. ``ins``: (left, right, up, down) neighbours inside the
+    image for every pixel of the row (the first / last column are fixed by the caller)."""
+    il, ir, iu, idn = ins[0], ins[1], ins[2], ins[3]
+    for i in range(n):
+        x = Sc[i]
+        p = 0.0
+        p = max(p, (1.0 if not Vl[i] else (_ramp(gl[i], jump, jump) if x > Sl[i] else 0.0)) * il)
+        p = max(p, (1.0 if not Vr[i] else (_ramp(gr[i], jump, jump) if x > Sr[i] else 0.0)) * ir)
+        p = max(p, (1.0 if not Vu[i] else (_ramp(gu[i], jump, jump) if x > Su[i] else 0.0)) * iu)
+        p = max(p, (1.0 if not Vd[i] else (_ramp(gd[i], jump, jump) if x > Sd[i] else 0.0)) * idn)
+        prof[i] = p if Vc[i] else 0.0
+
+
+@njit(cache=True)
+def _profile_at(V, S, cur_g, up_g, r, c, h, w, jump):
+    """The profile ink of :func:`_profile_row` at one pixel, image borders respected."""
+    s_r = r & 3
+    ic = c + 2
+    if not V[s_r, ic]:
+        return 0.0
+    p = 0.0
+    for k in range(4):
+        dr, dc = _DR4[k], _DC4[k]
+        r2, c2 = r + dr, c + dc
+        if not (r2 >= 0 and r2 < h and c2 >= 0 and c2 < w):
+            continue
+        s2 = (r2) & 3
+        if not V[s2, ic + dc]:
+            p = 1.0
+            continue
+        if k == 0:
+            g = cur_g[3, c + 1]
+        elif k == 1:
+            g = cur_g[3, c]
+        elif k == 2:
+            g = cur_g[1, c + 1]
+        else:
+            g = up_g[1, c + 1]
+        if S[s_r, ic] > S[s2, ic + dc]:
+            p = max(p, _ramp(g, jump, jump))
+    return p
+
+
+@njit(cache=True, error_model="numpy")
+def _turn_row(V0, V3, X0, Y0, Z0, X1, Y1, Z1, X2, Y2, Z2, X3, Y3, Z3, n, cos_min, may):
+    """The first test of :func:`_depth_crease` for ``n`` pairs of a row: the segments P0 -> P1 and
+    P2 -> P3 (eye positions; P0 and P3 must be valid) turn by more than the threshold."""
+    for i in range(n):
+        ax = X1[i] - X0[i]
+        ay = Y1[i] - Y0[i]
+        az = Z1[i] - Z0[i]
+        bx = X3[i] - X2[i]
+        by = Y3[i] - Y2[i]
+        bz = Z3[i] - Z2[i]
+        dot = ax * bx + ay * by + az * bz
+        norms = math.sqrt((ax * ax + ay * ay + az * az) * (bx * bx + by * by + bz * bz))
+        may[i] = V0[i] & V3[i] & (not (dot >= cos_min * norms))
+
+
+@njit(cache=True, error_model="numpy")
+def _dot_row(N0, N1, n, out):
+    """float32 dot products of the normals of two rows (as :func:`_dot` sums them)."""
+    for i in range(n):
+        out[i] = N0[i, 0] * N1[i, 0] + N0[i, 1] * N1[i, 1] + N0[i, 2] * N1[i, 2]
 
 
 @njit(parallel=True, cache=True)
@@ -764,6 +815,14 @@ def edge_pass(
         EX = np.empty((4, w + 4), dtype=np.float64)
         EY = np.empty((4, w + 4), dtype=np.float64)
         EZ = np.empty((4, w + 4), dtype=np.float64)
+        prof = np.empty(w, dtype=np.float64)
+        may_h = np.zeros(w, dtype=np.bool_)
+        may_v = np.zeros(w, dtype=np.bool_)
+        dot_h = np.ones(w, dtype=np.float32)
+        dot_v = np.ones(w, dtype=np.float32)
+        dot_d1 = np.ones(w, dtype=np.float32)
+        dot_d2 = np.ones(w, dtype=np.float32)
+        ins = np.empty(4, dtype=np.float64)
         for r in range(r0 - 2, r0 + 2):
             _ring_fill(
                 sz, depth, m, r, a, b, h, w, parallel, inv_d, inv_w, do_crease, S, D, V, EX, EY, EZ
@@ -774,55 +833,89 @@ def edge_pass(
                 sz, depth, m, r + 2, a, b, h, w, parallel, inv_d, inv_w, do_crease, S, D, V, EX, EY, EZ
             )
             _pair_rows(S, D, V, r, a, b, h, w, parallel, inv_d, jump, cur_g, cur_j)
-            s_up, s_r, s_dn = (r - 1) & 3, r & 3, (r + 1) & 3
+            s_up, s_r, s_dn, s_dn2 = (r - 1) & 3, r & 3, (r + 1) & 3, (r + 2) & 3
+            n = b - a
+            o = a + 2  # ring index of column a
+            ins[0] = 1.0
+            ins[1] = 1.0
+            ins[2] = 1.0 if r > 0 else 0.0
+            ins[3] = 1.0 if r + 1 < h else 0.0
+            _profile_row(
+                V[s_r, o:], V[s_r, o - 1 :], V[s_r, o + 1 :], V[s_up, o:], V[s_dn, o:],
+                S[s_r, o:], S[s_r, o - 1 :], S[s_r, o + 1 :], S[s_up, o:], S[s_dn, o:],
+                cur_g[3, a:], cur_g[3, a + 1 :], up_g[1, a + 1 :], cur_g[1, a + 1 :],
+                n, ins, jump, prof,
+            )
+            # The image border is not an edge: the first / last column has no neighbour there.
+            for c in (0, w - 1):
+                if a <= c < b:
+                    prof[c - a] = _profile_at(V, S, cur_g, up_g, r, c, h, w, jump)
+            rn = min(r + 1, h - 1)  # (a row that exists; unused where the row below does not)
+            ru = max(r - 1, 0)
+            if do_crease:
+                _turn_row(
+                    V[s_r, o - 1 :], V[s_r, o + 2 :],
+                    EX[s_r, o - 1 :], EY[s_r, o - 1 :], EZ[s_r, o - 1 :],
+                    EX[s_r, o:], EY[s_r, o:], EZ[s_r, o:],
+                    EX[s_r, o + 1 :], EY[s_r, o + 1 :], EZ[s_r, o + 1 :],
+                    EX[s_r, o + 2 :], EY[s_r, o + 2 :], EZ[s_r, o + 2 :],
+                    n, cos_min, may_h,
+                )
+                _turn_row(
+                    V[s_up, o:], V[s_dn2, o:],
+                    EX[s_up, o:], EY[s_up, o:], EZ[s_up, o:],
+                    EX[s_r, o:], EY[s_r, o:], EZ[s_r, o:],
+                    EX[s_dn, o:], EY[s_dn, o:], EZ[s_dn, o:],
+                    EX[s_dn2, o:], EY[s_dn2, o:], EZ[s_dn2, o:],
+                    n, cos_min, may_v,
+                )
+                _dot_row(normal[r, a:], normal[r, min(a + 1, w - 1) :], n - (1 if b == w else 0), dot_h)
+                _dot_row(normal[r, a:], normal[rn, a:], n, dot_v)
+            # The diagonal pairs of pixel c = a + i, at index i: (r - 1, c - 1) . (r + 1, c + 1)
+            # and (r - 1, c + 1) . (r + 1, c - 1), for the columns that have both.
+            c_lo, c_hi = max(a, 1), min(b, w - 1)
+            if mode != MODE_PAIRS and c_hi > c_lo:
+                nd = c_hi - c_lo
+                _dot_row(normal[ru, c_lo - 1 :], normal[rn, c_lo + 1 :], nd, dot_d1[c_lo - a :])
+                _dot_row(normal[ru, c_lo + 1 :], normal[rn, c_lo - 1 :], nd, dot_d2[c_lo - a :])
             for c in range(a, b):
-                i = c + 2
-                valid = V[s_r, i]
-                prof = 0.0
+                i = c - a
+                ic = c + 2
+                p = prof[i]
                 best = 0.0
-                if valid:
-                    for k in range(4):
-                        dr, dc = _DR4[k], _DC4[k]
-                        r2, c2 = r + dr, c + dc
-                        if not (r2 >= 0 and r2 < h and c2 >= 0 and c2 < w):
-                            continue
-                        s2 = s_r if k < 2 else (s_dn if k == 2 else s_up)
-                        if not V[s2, i + dc]:
-                            prof = 1.0
-                            continue
-                        if k == 0:
-                            g = cur_g[3, c + 1]
-                        elif k == 1:
-                            g = cur_g[3, c]
-                        elif k == 2:
-                            g = cur_g[1, c + 1]
-                        else:
-                            g = up_g[1, c + 1]
-                        if S[s_r, i] > S[s2, i + dc]:
-                            prof = max(prof, _ramp(g, jump, jump))
-                        if k == 1 or k == 3 or g > jump or not do_crease:
-                            continue
-                        may = _section_may_turn(V, r, c, dr, dc, EX, EY, EZ, cos_min)
-                        if not may and _dot(normal, r, c, r2, c2) >= cos_skip:
-                            continue
-                        ink, geo = _pair_crease(
-                            sz, depth, normal, m, r, c, dr, dc, h, w, parallel, inv_d,
-                            inv_w, jump, crease, soft, cos_min, cos_skip, may,
-                        )
-                        if ink > abs(best):
-                            best = ink if geo >= 0.0 else -ink
-                cre = best if prof < 1.0 else 0.0
+                if do_crease and V[s_r, ic]:
+                    # right: inside, valid, depth continuous, and a turn that may reach it
+                    if c + 1 < w and V[s_r, ic + 1] and not cur_g[3, c + 1] > jump:
+                        may = may_h[i]
+                        if may or not dot_h[i] >= cos_skip:
+                            ink, geo = _pair_crease(
+                                sz, depth, normal, m, r, c, 0, 1, h, w, parallel, inv_d,
+                                inv_w, jump, crease, soft, cos_min, cos_skip, may,
+                            )
+                            if ink > abs(best):
+                                best = ink if geo >= 0.0 else -ink
+                    if r + 1 < h and V[s_dn, ic] and not cur_g[1, c + 1] > jump:
+                        may = may_v[i]
+                        if may or not dot_v[i] >= cos_skip:
+                            ink, geo = _pair_crease(
+                                sz, depth, normal, m, r, c, 1, 0, h, w, parallel, inv_d,
+                                inv_w, jump, crease, soft, cos_min, cos_skip, may,
+                            )
+                            if ink > abs(best):
+                                best = ink if geo >= 0.0 else -ink
+                cre = best if p < 1.0 else 0.0
                 if mode == MODE_PAIRS:
-                    out_a[r, c] = prof
+                    out_a[r, c] = p
                     out_b[r, c] = cre
                     continue
                 inner = 0.0
-                if valid:
+                if V[s_r, ic]:
                     cmin = 1.0
-                    for dc in range(-1, 2, 2):
-                        ra, ca, rb, cb = r - 1, c + dc, r + 1, c - dc
-                        if V[s_up, ca + 2] and V[s_dn, cb + 2]:
-                            cmin = min(cmin, np.float64(_dot(normal, ra, ca, rb, cb)))
+                    # (r - 1, c - 1) . (r + 1, c + 1), then (r - 1, c + 1) . (r + 1, c - 1)
+                    if V[s_up, ic - 1] and V[s_dn, ic + 1]:
+                        cmin = min(cmin, np.float64(dot_d1[i]))
+                    if V[s_up, ic + 1] and V[s_dn, ic - 1]:
+                        cmin = min(cmin, np.float64(dot_d2[i]))
                     if not cmin >= cos_skip:
                         ang = math.degrees(math.acos(min(1.0, max(-1.0, cmin))))
                         inner = _ramp(ang, crease, soft)
@@ -839,13 +932,13 @@ def edge_pass(
                     em_prof = min(1.0, 2.0 * total / 8.0)
                 else:
                     iz = 1.0
-                    for i in range(2):
-                        if i == 0:
+                    for q in range(2):
+                        if q == 0:
                             jj = 2.0 * max(up_j[2, c], cur_j[2, c + 1])
                         else:
                             jj = 2.0 * max(up_j[0, c + 2], cur_j[0, c + 1])
-                        s = 1.0 - 0.5 * jj
-                        iz *= s * s
+                        sq = 1.0 - 0.5 * jj
+                        iz *= sq * sq
                     em_prof = 1.0 - iz
                 # np.maximum of the float32 images, NaN kept.
                 fi = np.float32(inner)
