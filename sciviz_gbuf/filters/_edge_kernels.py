@@ -754,6 +754,79 @@ def _dot_row(N0, N1, n, out):
         out[i] = N0[i, 0] * N1[i, 0] + N0[i, 1] * N1[i, 1] + N0[i, 2] * N1[i, 2]
 
 
+@njit(cache=True, error_model="numpy")
+def _candidates_row(Vc, Vr, Vd, gr, gd, may_h, may_v, dot_h, dot_v, n, jump, cos_skip,
+                    last_col, has_down, cand):
+    """Bit 1 / 2 of ``cand[i]``: the pair to the right / below may be a crease (both pixels
+    valid, depth continuous, and the section or the normals turn enough); the tests of
+    :func:`pair_edge_kernel` before its exact evaluation, in the same floating-point form."""
+    for i in range(n):
+        ch = Vc[i] & Vr[i] & (not gr[i] > jump) & (may_h[i] | (not dot_h[i] >= cos_skip))
+        cv = Vc[i] & Vd[i] & (not gd[i] > jump) & (may_v[i] | (not dot_v[i] >= cos_skip))
+        cand[i] = (1 if ch else 0) + (2 if cv and has_down else 0)
+    if last_col:
+        cand[n - 1] &= 2  # the last column has no right neighbour
+
+
+@njit(cache=True)
+def _store_row(prof, cre, n, out_a, out_b):
+    for i in range(n):
+        out_a[i] = prof[i]
+        out_b[i] = cre[i]
+
+
+@njit(cache=True, error_model="numpy")
+def _inner_row(Vc, Vul, Vdr, Vur, Vdl, d1, d2, n, cos_skip, out):
+    """The smaller cosine of the two diagonal normal pairs around each valid pixel (1 where
+    none), as :func:`edge_map_kernel` takes it; ``d1``/``d2`` from :func:`_dot_row`."""
+    for i in range(n):
+        cmin = 1.0
+        if Vul[i] & Vdr[i]:
+            cmin = min(cmin, np.float64(d1[i]))
+        if Vur[i] & Vdl[i]:
+            cmin = min(cmin, np.float64(d2[i]))
+        out[i] = cmin if Vc[i] else 1.0
+
+
+@njit(cache=True, error_model="numpy")
+def _c1_row(ul, u, ur, l, x_r, x_dl, x_d, x_dr, n, out):
+    """The C1 profile of :func:`edge_map_kernel` from the pair rows."""
+    for i in range(n):
+        total = 0.0
+        total += 1.0 * ul[i]
+        total += 2.0 * u[i]
+        total += 1.0 * ur[i]
+        total += 2.0 * l[i]
+        total += 2.0 * x_r[i]
+        total += 1.0 * x_dl[i]
+        total += 2.0 * x_d[i]
+        total += 1.0 * x_dr[i]
+        out[i] = min(1.0, 2.0 * total / 8.0)
+
+
+@njit(cache=True, error_model="numpy")
+def _diagonal_row(ax, xh, cx, xf, n, out):
+    """The diagonal profile ``1 - I_Z`` of :func:`edge_map_kernel` from the pair rows."""
+    for i in range(n):
+        s = 1.0 - 0.5 * (2.0 * max(ax[i], xh[i]))
+        iz = 1.0 * (s * s)
+        s = 1.0 - 0.5 * (2.0 * max(cx[i], xf[i]))
+        iz *= s * s
+        out[i] = 1.0 - iz
+
+
+@njit(cache=True, error_model="numpy")
+def _combine_row(inner, cre, prof, n, out_a, out_b):
+    """``max(inner, |crease|)`` of the float32 images (NaN kept, as ``np.maximum``) and the
+    profile, into the output rows."""
+    for i in range(n):
+        fi = np.float32(inner[i])
+        fc = np.float32(abs(np.float32(cre[i])))
+        v = fi if fi >= fc else fc
+        out_a[i] = np.float32(np.nan) if (fi != fi) | (fc != fc) else v
+        out_b[i] = prof[i]
+
+
 @njit(parallel=True, cache=True)
 def edge_pass(
     sz,
@@ -823,6 +896,9 @@ def edge_pass(
         dot_d1 = np.ones(w, dtype=np.float32)
         dot_d2 = np.ones(w, dtype=np.float32)
         ins = np.empty(4, dtype=np.float64)
+        cand = np.zeros(w, dtype=np.uint8)
+        cre_row = np.empty(w, dtype=np.float64)
+        inner_row = np.empty(w, dtype=np.float64)
         for r in range(r0 - 2, r0 + 2):
             _ring_fill(
                 sz, depth, m, r, a, b, h, w, parallel, inv_d, inv_w, do_crease, S, D, V, EX, EY, EZ
@@ -878,78 +954,77 @@ def edge_pass(
                 nd = c_hi - c_lo
                 _dot_row(normal[ru, c_lo - 1 :], normal[rn, c_lo + 1 :], nd, dot_d1[c_lo - a :])
                 _dot_row(normal[ru, c_lo + 1 :], normal[rn, c_lo - 1 :], nd, dot_d2[c_lo - a :])
-            for c in range(a, b):
-                i = c - a
-                ic = c + 2
-                p = prof[i]
-                best = 0.0
-                if do_crease and V[s_r, ic]:
-                    # right: inside, valid, depth continuous, and a turn that may reach it
-                    if c + 1 < w and V[s_r, ic + 1] and not cur_g[3, c + 1] > jump:
+            if do_crease:
+                _candidates_row(
+                    V[s_r, o:], V[s_r, o + 1 :], V[s_dn, o:], cur_g[3, a + 1 :],
+                    cur_g[1, a + 1 :], may_h, may_v, dot_h, dot_v, n, jump, cos_skip,
+                    1 if b == w else 0, 1 if r + 1 < h else 0, cand,
+                )
+            for i in range(n):
+                cre_row[i] = 0.0
+            if do_crease:
+                for i in range(n):
+                    if cand[i] == 0:
+                        continue
+                    c = a + i
+                    best = 0.0
+                    if cand[i] & 1:
                         may = may_h[i]
-                        if may or not dot_h[i] >= cos_skip:
-                            ink, geo = _pair_crease(
-                                sz, depth, normal, m, r, c, 0, 1, h, w, parallel, inv_d,
-                                inv_w, jump, crease, soft, cos_min, cos_skip, may,
-                            )
-                            if ink > abs(best):
-                                best = ink if geo >= 0.0 else -ink
-                    if r + 1 < h and V[s_dn, ic] and not cur_g[1, c + 1] > jump:
+                        ink, geo = _pair_crease(
+                            sz, depth, normal, m, r, c, 0, 1, h, w, parallel, inv_d,
+                            inv_w, jump, crease, soft, cos_min, cos_skip, may,
+                        )
+                        if ink > abs(best):
+                            best = ink if geo >= 0.0 else -ink
+                    if cand[i] & 2:
                         may = may_v[i]
-                        if may or not dot_v[i] >= cos_skip:
-                            ink, geo = _pair_crease(
-                                sz, depth, normal, m, r, c, 1, 0, h, w, parallel, inv_d,
-                                inv_w, jump, crease, soft, cos_min, cos_skip, may,
-                            )
-                            if ink > abs(best):
-                                best = ink if geo >= 0.0 else -ink
-                cre = best if p < 1.0 else 0.0
-                if mode == MODE_PAIRS:
-                    out_a[r, c] = p
-                    out_b[r, c] = cre
-                    continue
-                inner = 0.0
-                if V[s_r, ic]:
-                    cmin = 1.0
-                    # (r - 1, c - 1) . (r + 1, c + 1), then (r - 1, c + 1) . (r + 1, c - 1)
-                    if V[s_up, ic - 1] and V[s_dn, ic + 1]:
-                        cmin = min(cmin, np.float64(dot_d1[i]))
-                    if V[s_up, ic + 1] and V[s_dn, ic - 1]:
-                        cmin = min(cmin, np.float64(dot_d2[i]))
-                    if not cmin >= cos_skip:
-                        ang = math.degrees(math.acos(min(1.0, max(-1.0, cmin))))
-                        inner = _ramp(ang, crease, soft)
-                if mode == MODE_C1:
-                    total = 0.0
-                    total += 1.0 * up_j[2, c]
-                    total += 2.0 * up_j[1, c + 1]
-                    total += 1.0 * up_j[0, c + 2]
-                    total += 2.0 * cur_j[3, c]
-                    total += 2.0 * cur_j[3, c + 1]
-                    total += 1.0 * cur_j[0, c + 1]
-                    total += 2.0 * cur_j[1, c + 1]
-                    total += 1.0 * cur_j[2, c + 1]
-                    em_prof = min(1.0, 2.0 * total / 8.0)
-                else:
-                    iz = 1.0
-                    for q in range(2):
-                        if q == 0:
-                            jj = 2.0 * max(up_j[2, c], cur_j[2, c + 1])
-                        else:
-                            jj = 2.0 * max(up_j[0, c + 2], cur_j[0, c + 1])
-                        sq = 1.0 - 0.5 * jj
-                        iz *= sq * sq
-                    em_prof = 1.0 - iz
-                # np.maximum of the float32 images, NaN kept.
-                fi = np.float32(inner)
-                fc = np.float32(abs(np.float32(cre)))
-                if fi != fi or fc != fc:
-                    out_a[r, c] = np.float32(np.nan)
-                else:
-                    out_a[r, c] = fi if fi >= fc else fc
-                out_b[r, c] = em_prof
+                        ink, geo = _pair_crease(
+                            sz, depth, normal, m, r, c, 1, 0, h, w, parallel, inv_d,
+                            inv_w, jump, crease, soft, cos_min, cos_skip, may,
+                        )
+                        if ink > abs(best):
+                            best = ink if geo >= 0.0 else -ink
+                    cre_row[i] = best if prof[i] < 1.0 else 0.0
+            if mode == MODE_PAIRS:
+                _store_row(prof, cre_row, n, out_a[r, a:], out_b[r, a:])
+            else:
+                _edge_map_row(
+                    V, S, dot_d1, dot_d2, up_j, cur_j, r, a, n, mode, crease, soft, cos_skip,
+                    prof, cre_row, inner_row, out_a[r, a:], out_b[r, a:],
+                )
             up_g, cur_g = cur_g, up_g
             up_j, cur_j = cur_j, up_j
+
+
+@njit(cache=True)
+def _edge_map_row(V, S, dot_d1, dot_d2, up_j, cur_j, r, a, n, mode, crease, soft, cos_skip,
+                  prof, cre_row, inner_row, out_a, out_b):
+    """The 2003 operators of :func:`edge_map_kernel` on one row of the span, combined with the
+    crease row into the output rows (``prof`` is overwritten)."""
+    s_up, s_r, s_dn = (r - 1) & 3, r & 3, (r + 1) & 3
+    o = a + 2
+    _inner_row(
+        V[s_r, o:], V[s_up, o - 1 :], V[s_dn, o + 1 :], V[s_up, o + 1 :],
+        V[s_dn, o - 1 :], dot_d1, dot_d2, n, cos_skip, inner_row,
+    )
+    for i in range(n):
+        cm = inner_row[i]
+        if not cm >= cos_skip:
+            ang = math.degrees(math.acos(min(1.0, max(-1.0, cm))))
+            inner_row[i] = _ramp(ang, crease, soft)
+        else:
+            inner_row[i] = 0.0
+    if mode == MODE_C1:
+        _c1_row(
+            up_j[2, a:], up_j[1, a + 1 :], up_j[0, a + 2 :], cur_j[3, a:],
+            cur_j[3, a + 1 :], cur_j[0, a + 1 :], cur_j[1, a + 1 :], cur_j[2, a + 1 :],
+            n, prof,
+        )
+    else:
+        _diagonal_row(
+            up_j[2, a:], cur_j[2, a + 1 :], up_j[0, a + 2 :], cur_j[0, a + 1 :], n, prof
+        )
+    _combine_row(inner_row, cre_row, prof, n, out_a, out_b)
 
 
 @njit(parallel=True, cache=True)
