@@ -21,9 +21,11 @@ __all__ = [
     "MODE_C1",
     "MODE_DIAGONAL",
     "MODE_PAIRS",
+    "clean_lines",
     "edge_map_finish",
     "edge_map_kernel",
     "edge_pass",
+    "finish_lines",
     "id_edge_kernel",
     "pair_edge_kernel",
 ]
@@ -627,8 +629,8 @@ def _kind_row(Sx, Sy, Sm, Sp, Vx, Vy, Vm, Vp, Dx, Dy, n, parallel, inv_d, jump, 
 def _pair_rows(S, D, V, r, a, b, h, w, parallel, inv_d, jump, gap, pj):
     """Row buffers of the pairs from row ``r``, columns ``[a, b)``, from the ring buffers:
     ``gap[k, c + 1]`` the unexplained jump (:func:`_pair_gap`, same arithmetic) where both
-    pixels are valid and it exceeds ``jump`` (else a number <= ``jump``), ``pj[k, c + 1]`` the 2003 jump strength (:func:`_pair_jump`);
-    the columns just outside the span are 0."""
+    pixels are valid and it exceeds ``jump`` (else a number <= ``jump``), ``pj[k, c + 1]``
+    the 2003 jump strength (:func:`_pair_jump`); the columns just outside the span are 0."""
     for k in range(4):
         gap[k, a] = 0.0
         gap[k, b + 1] = 0.0
@@ -644,9 +646,22 @@ def _pair_rows(S, D, V, r, a, b, h, w, parallel, inv_d, jump, gap, pj):
         sx, sy, sm, sp = r & 3, (r + dr) & 3, (r - dr) & 3, (r + 2 * dr) & 3
         o = a + 2  # ring index of column a
         _kind_row(
-            S[sx, o:], S[sy, o + dc :], S[sm, o - dc :], S[sp, o + 2 * dc :],
-            V[sx, o:], V[sy, o + dc :], V[sm, o - dc :], V[sp, o + 2 * dc :],
-            D[sx, o:], D[sy, o + dc :], b - a, parallel, inv_d, jump, gap[k, a + 1 :], pj[k, a + 1 :],
+            S[sx, o:],
+            S[sy, o + dc :],
+            S[sm, o - dc :],
+            S[sp, o + 2 * dc :],
+            V[sx, o:],
+            V[sy, o + dc :],
+            V[sm, o - dc :],
+            V[sp, o + 2 * dc :],
+            D[sx, o:],
+            D[sy, o + dc :],
+            b - a,
+            parallel,
+            inv_d,
+            jump,
+            gap[k, a + 1 :],
+            pj[k, a + 1 :],
         )
         # A pair leaving the image sideways is no pair (the border is not an edge).
         if dc < 0 and a == 0:
@@ -656,16 +671,33 @@ def _pair_rows(S, D, V, r, a, b, h, w, parallel, inv_d, jump, gap, pj):
 
 
 @njit(cache=True)
-def _pair_crease(sz, depth, normal, m, r, c, dr, dc, h, w, parallel, inv_d, inv_w, jump,
-                 crease, soft, cos_min, cos_skip, may_turn):
+def _pair_crease(
+    sz,
+    depth,
+    normal,
+    m,
+    r,
+    c,
+    dr,
+    dc,
+    h,
+    w,
+    parallel,
+    inv_d,
+    inv_w,
+    jump,
+    crease,
+    soft,
+    cos_min,
+    cos_skip,
+    may_turn,
+):
     """(ink, sign) of the crease of the pair (r, c) -> (r + dr, c + dc), as in
     :func:`pair_edge_kernel`; ``may_turn`` is :func:`_turn_row`'s test of the pair."""
     r2, c2 = r + dr, c + dc
     geo = 0.0
     if may_turn:
-        geo = _depth_crease(
-            sz, depth, m, r, c, dr, dc, h, w, parallel, inv_d, inv_w, jump, cos_min
-        )
+        geo = _depth_crease(sz, depth, m, r, c, dr, dc, h, w, parallel, inv_d, inv_w, jump, cos_min)
     d = _dot(normal, r, c, r2, c2)
     if geo == 0.0 and d >= cos_skip:
         return 0.0, 1.0
@@ -755,8 +787,9 @@ def _dot_row(N0, N1, n, out):
 
 
 @njit(cache=True, error_model="numpy")
-def _candidates_row(Vc, Vr, Vd, gr, gd, may_h, may_v, dot_h, dot_v, n, jump, cos_skip,
-                    last_col, has_down, cand):
+def _candidates_row(
+    Vc, Vr, Vd, gr, gd, may_h, may_v, dot_h, dot_v, n, jump, cos_skip, last_col, has_down, cand
+):
     """Bit 1 / 2 of ``cand[i]``: the pair to the right / below may be a crease (both pixels
     valid, depth continuous, and the section or the normals turn enough); the tests of
     :func:`pair_edge_kernel` before its exact evaluation, in the same floating-point form."""
@@ -789,14 +822,14 @@ def _inner_row(Vc, Vul, Vdr, Vur, Vdl, d1, d2, n, cos_skip, out):
 
 
 @njit(cache=True, error_model="numpy")
-def _c1_row(ul, u, ur, l, x_r, x_dl, x_d, x_dr, n, out):
+def _c1_row(ul, u, ur, x_l, x_r, x_dl, x_d, x_dr, n, out):
     """The C1 profile of :func:`edge_map_kernel` from the pair rows."""
     for i in range(n):
         total = 0.0
         total += 1.0 * ul[i]
         total += 2.0 * u[i]
         total += 1.0 * ur[i]
-        total += 2.0 * l[i]
+        total += 2.0 * x_l[i]
         total += 2.0 * x_r[i]
         total += 1.0 * x_dl[i]
         total += 2.0 * x_d[i]
@@ -906,7 +939,24 @@ def edge_pass(
         _pair_rows(S, D, V, r0 - 1, a, b, h, w, parallel, inv_d, jump, up_g, up_j)
         for r in range(r0, r1):
             _ring_fill(
-                sz, depth, m, r + 2, a, b, h, w, parallel, inv_d, inv_w, do_crease, S, D, V, EX, EY, EZ
+                sz,
+                depth,
+                m,
+                r + 2,
+                a,
+                b,
+                h,
+                w,
+                parallel,
+                inv_d,
+                inv_w,
+                do_crease,
+                S,
+                D,
+                V,
+                EX,
+                EY,
+                EZ,
             )
             _pair_rows(S, D, V, r, a, b, h, w, parallel, inv_d, jump, cur_g, cur_j)
             s_up, s_r, s_dn, s_dn2 = (r - 1) & 3, r & 3, (r + 1) & 3, (r + 2) & 3
@@ -917,10 +967,24 @@ def edge_pass(
             ins[2] = 1.0 if r > 0 else 0.0
             ins[3] = 1.0 if r + 1 < h else 0.0
             _profile_row(
-                V[s_r, o:], V[s_r, o - 1 :], V[s_r, o + 1 :], V[s_up, o:], V[s_dn, o:],
-                S[s_r, o:], S[s_r, o - 1 :], S[s_r, o + 1 :], S[s_up, o:], S[s_dn, o:],
-                cur_g[3, a:], cur_g[3, a + 1 :], up_g[1, a + 1 :], cur_g[1, a + 1 :],
-                n, ins, jump, prof,
+                V[s_r, o:],
+                V[s_r, o - 1 :],
+                V[s_r, o + 1 :],
+                V[s_up, o:],
+                V[s_dn, o:],
+                S[s_r, o:],
+                S[s_r, o - 1 :],
+                S[s_r, o + 1 :],
+                S[s_up, o:],
+                S[s_dn, o:],
+                cur_g[3, a:],
+                cur_g[3, a + 1 :],
+                up_g[1, a + 1 :],
+                cur_g[1, a + 1 :],
+                n,
+                ins,
+                jump,
+                prof,
             )
             # The image border is not an edge: the first / last column has no neighbour there.
             for c in (0, w - 1):
@@ -930,22 +994,46 @@ def edge_pass(
             ru = max(r - 1, 0)
             if do_crease:
                 _turn_row(
-                    V[s_r, o - 1 :], V[s_r, o + 2 :],
-                    EX[s_r, o - 1 :], EY[s_r, o - 1 :], EZ[s_r, o - 1 :],
-                    EX[s_r, o:], EY[s_r, o:], EZ[s_r, o:],
-                    EX[s_r, o + 1 :], EY[s_r, o + 1 :], EZ[s_r, o + 1 :],
-                    EX[s_r, o + 2 :], EY[s_r, o + 2 :], EZ[s_r, o + 2 :],
-                    n, cos_min, may_h,
+                    V[s_r, o - 1 :],
+                    V[s_r, o + 2 :],
+                    EX[s_r, o - 1 :],
+                    EY[s_r, o - 1 :],
+                    EZ[s_r, o - 1 :],
+                    EX[s_r, o:],
+                    EY[s_r, o:],
+                    EZ[s_r, o:],
+                    EX[s_r, o + 1 :],
+                    EY[s_r, o + 1 :],
+                    EZ[s_r, o + 1 :],
+                    EX[s_r, o + 2 :],
+                    EY[s_r, o + 2 :],
+                    EZ[s_r, o + 2 :],
+                    n,
+                    cos_min,
+                    may_h,
                 )
                 _turn_row(
-                    V[s_up, o:], V[s_dn2, o:],
-                    EX[s_up, o:], EY[s_up, o:], EZ[s_up, o:],
-                    EX[s_r, o:], EY[s_r, o:], EZ[s_r, o:],
-                    EX[s_dn, o:], EY[s_dn, o:], EZ[s_dn, o:],
-                    EX[s_dn2, o:], EY[s_dn2, o:], EZ[s_dn2, o:],
-                    n, cos_min, may_v,
+                    V[s_up, o:],
+                    V[s_dn2, o:],
+                    EX[s_up, o:],
+                    EY[s_up, o:],
+                    EZ[s_up, o:],
+                    EX[s_r, o:],
+                    EY[s_r, o:],
+                    EZ[s_r, o:],
+                    EX[s_dn, o:],
+                    EY[s_dn, o:],
+                    EZ[s_dn, o:],
+                    EX[s_dn2, o:],
+                    EY[s_dn2, o:],
+                    EZ[s_dn2, o:],
+                    n,
+                    cos_min,
+                    may_v,
                 )
-                _dot_row(normal[r, a:], normal[r, min(a + 1, w - 1) :], n - (1 if b == w else 0), dot_h)
+                _dot_row(
+                    normal[r, a:], normal[r, min(a + 1, w - 1) :], n - (1 if b == w else 0), dot_h
+                )
                 _dot_row(normal[r, a:], normal[rn, a:], n, dot_v)
             # The diagonal pairs of pixel c = a + i, at index i: (r - 1, c - 1) . (r + 1, c + 1)
             # and (r - 1, c + 1) . (r + 1, c - 1), for the columns that have both.
@@ -956,9 +1044,21 @@ def edge_pass(
                 _dot_row(normal[ru, c_lo + 1 :], normal[rn, c_lo - 1 :], nd, dot_d2[c_lo - a :])
             if do_crease:
                 _candidates_row(
-                    V[s_r, o:], V[s_r, o + 1 :], V[s_dn, o:], cur_g[3, a + 1 :],
-                    cur_g[1, a + 1 :], may_h, may_v, dot_h, dot_v, n, jump, cos_skip,
-                    1 if b == w else 0, 1 if r + 1 < h else 0, cand,
+                    V[s_r, o:],
+                    V[s_r, o + 1 :],
+                    V[s_dn, o:],
+                    cur_g[3, a + 1 :],
+                    cur_g[1, a + 1 :],
+                    may_h,
+                    may_v,
+                    dot_h,
+                    dot_v,
+                    n,
+                    jump,
+                    cos_skip,
+                    1 if b == w else 0,
+                    1 if r + 1 < h else 0,
+                    cand,
                 )
             for i in range(n):
                 cre_row[i] = 0.0
@@ -971,16 +1071,50 @@ def edge_pass(
                     if cand[i] & 1:
                         may = may_h[i]
                         ink, geo = _pair_crease(
-                            sz, depth, normal, m, r, c, 0, 1, h, w, parallel, inv_d,
-                            inv_w, jump, crease, soft, cos_min, cos_skip, may,
+                            sz,
+                            depth,
+                            normal,
+                            m,
+                            r,
+                            c,
+                            0,
+                            1,
+                            h,
+                            w,
+                            parallel,
+                            inv_d,
+                            inv_w,
+                            jump,
+                            crease,
+                            soft,
+                            cos_min,
+                            cos_skip,
+                            may,
                         )
                         if ink > abs(best):
                             best = ink if geo >= 0.0 else -ink
                     if cand[i] & 2:
                         may = may_v[i]
                         ink, geo = _pair_crease(
-                            sz, depth, normal, m, r, c, 1, 0, h, w, parallel, inv_d,
-                            inv_w, jump, crease, soft, cos_min, cos_skip, may,
+                            sz,
+                            depth,
+                            normal,
+                            m,
+                            r,
+                            c,
+                            1,
+                            0,
+                            h,
+                            w,
+                            parallel,
+                            inv_d,
+                            inv_w,
+                            jump,
+                            crease,
+                            soft,
+                            cos_min,
+                            cos_skip,
+                            may,
                         )
                         if ink > abs(best):
                             best = ink if geo >= 0.0 else -ink
@@ -989,23 +1123,65 @@ def edge_pass(
                 _store_row(prof, cre_row, n, out_a[r, a:], out_b[r, a:])
             else:
                 _edge_map_row(
-                    V, S, dot_d1, dot_d2, up_j, cur_j, r, a, n, mode, crease, soft, cos_skip,
-                    prof, cre_row, inner_row, out_a[r, a:], out_b[r, a:],
+                    V,
+                    S,
+                    dot_d1,
+                    dot_d2,
+                    up_j,
+                    cur_j,
+                    r,
+                    a,
+                    n,
+                    mode,
+                    crease,
+                    soft,
+                    cos_skip,
+                    prof,
+                    cre_row,
+                    inner_row,
+                    out_a[r, a:],
+                    out_b[r, a:],
                 )
             up_g, cur_g = cur_g, up_g
             up_j, cur_j = cur_j, up_j
 
 
 @njit(cache=True)
-def _edge_map_row(V, S, dot_d1, dot_d2, up_j, cur_j, r, a, n, mode, crease, soft, cos_skip,
-                  prof, cre_row, inner_row, out_a, out_b):
+def _edge_map_row(
+    V,
+    S,
+    dot_d1,
+    dot_d2,
+    up_j,
+    cur_j,
+    r,
+    a,
+    n,
+    mode,
+    crease,
+    soft,
+    cos_skip,
+    prof,
+    cre_row,
+    inner_row,
+    out_a,
+    out_b,
+):
     """The 2003 operators of :func:`edge_map_kernel` on one row of the span, combined with the
     crease row into the output rows (``prof`` is overwritten)."""
     s_up, s_r, s_dn = (r - 1) & 3, r & 3, (r + 1) & 3
     o = a + 2
     _inner_row(
-        V[s_r, o:], V[s_up, o - 1 :], V[s_dn, o + 1 :], V[s_up, o + 1 :],
-        V[s_dn, o - 1 :], dot_d1, dot_d2, n, cos_skip, inner_row,
+        V[s_r, o:],
+        V[s_up, o - 1 :],
+        V[s_dn, o + 1 :],
+        V[s_up, o + 1 :],
+        V[s_dn, o - 1 :],
+        dot_d1,
+        dot_d2,
+        n,
+        cos_skip,
+        inner_row,
     )
     for i in range(n):
         cm = inner_row[i]
@@ -1016,14 +1192,19 @@ def _edge_map_row(V, S, dot_d1, dot_d2, up_j, cur_j, r, a, n, mode, crease, soft
             inner_row[i] = 0.0
     if mode == MODE_C1:
         _c1_row(
-            up_j[2, a:], up_j[1, a + 1 :], up_j[0, a + 2 :], cur_j[3, a:],
-            cur_j[3, a + 1 :], cur_j[0, a + 1 :], cur_j[1, a + 1 :], cur_j[2, a + 1 :],
-            n, prof,
+            up_j[2, a:],
+            up_j[1, a + 1 :],
+            up_j[0, a + 2 :],
+            cur_j[3, a:],
+            cur_j[3, a + 1 :],
+            cur_j[0, a + 1 :],
+            cur_j[1, a + 1 :],
+            cur_j[2, a + 1 :],
+            n,
+            prof,
         )
     else:
-        _diagonal_row(
-            up_j[2, a:], cur_j[2, a + 1 :], up_j[0, a + 2 :], cur_j[0, a + 1 :], n, prof
-        )
+        _diagonal_row(up_j[2, a:], cur_j[2, a + 1 :], up_j[0, a + 2 :], cur_j[0, a + 1 :], n, prof)
     _combine_row(inner_row, cre_row, prof, n, out_a, out_b)
 
 
@@ -1057,3 +1238,153 @@ def edge_map_finish(inner, alpha, k, out):
                     out[r, col, 2] = v
                 else:
                     out[r, col, 3] = v
+
+
+# --------------------------------------------------------------------------- line cleaning
+#
+# The speck removal and hysteresis of ``edges._clean``, on the ink pixels only: lines cover a few
+# per cent of a picture, so two connected-component labellings of the whole image (and their
+# label images) cost far more than union-find over a list of the ink pixels.
+
+
+@njit(inline="always", cache=True)
+def _find(parent, i):
+    while parent[i] != i:
+        parent[i] = parent[parent[i]]
+        i = parent[i]
+    return i
+
+
+@njit(inline="always", cache=True)
+def _union(parent, i, j):
+    a = _find(parent, i)
+    b = _find(parent, j)
+    if a < b:
+        parent[b] = a
+    elif b < a:
+        parent[a] = b
+
+
+@njit(cache=True)
+def clean_lines(profile, crease, mask, length, ids):
+    """Zero, in place, the ink of ``profile`` / ``crease`` that ``edges._clean`` drops; returns
+    whether anything was dropped.
+
+    Strong ink (>= 0.5 in either image) forms 8-connected pieces; a piece stays if it has at
+    least ``length`` pixels (``length > 0``; else every piece stays) or a pixel on the outline
+    of ``mask`` (covered, with an uncovered 4-neighbour inside the image). All ink except the
+    strong pixels of dropped pieces forms 8-connected lines; a line stays if it holds a strong
+    pixel of a piece that stays. ``ids``: an int32 image of the buffer's shape, all 0 on entry
+    and on return (scratch: the ink pixels' numbers + 1 while it runs).
+    """
+    h, w = profile.shape
+    n = 0
+    for r in range(h):
+        for c in range(w):
+            if profile[r, c] > 0.0 or crease[r, c] != 0.0:
+                n += 1
+    pix = np.empty(n, dtype=np.int64)
+    strong = np.empty(n, dtype=np.bool_)
+    i = 0
+    for r in range(h):
+        for c in range(w):
+            if profile[r, c] > 0.0 or crease[r, c] != 0.0:
+                pix[i] = r * w + c
+                strong[i] = profile[r, c] >= 0.5 or abs(crease[r, c]) >= 0.5
+                ids[r, c] = i + 1
+                i += 1
+    # The strong pieces.
+    parent = np.arange(n)
+    for i in range(n):
+        if not strong[i]:
+            continue
+        r, c = pix[i] // w, pix[i] % w
+        for dr, dc in ((-1, -1), (-1, 0), (-1, 1), (0, -1)):
+            r2, c2 = r + dr, c + dc
+            if 0 <= r2 < h and 0 <= c2 < w:
+                j = ids[r2, c2] - 1
+                if j >= 0 and strong[j]:
+                    _union(parent, i, j)
+    size = np.zeros(n, dtype=np.int64)
+    edge = np.zeros(n, dtype=np.bool_)
+    for i in range(n):
+        if not strong[i]:
+            continue
+        root = _find(parent, i)
+        size[root] += 1
+        r, c = pix[i] // w, pix[i] % w
+        if mask[r, c] and (
+            (c + 1 < w and not mask[r, c + 1])
+            or (c > 0 and not mask[r, c - 1])
+            or (r + 1 < h and not mask[r + 1, c])
+            or (r > 0 and not mask[r - 1, c])
+        ):
+            edge[root] = True
+    kept = np.zeros(n, dtype=np.bool_)  # strong pixels of pieces that stay
+    node = np.empty(n, dtype=np.bool_)  # the pixels of the lines
+    for i in range(n):
+        if strong[i]:
+            root = _find(parent, i)
+            kept[i] = length <= 0 or size[root] >= length or edge[root]
+        node[i] = kept[i] or not strong[i]
+    # The lines, anchored on the kept pieces.
+    for i in range(n):
+        parent[i] = i
+    for i in range(n):
+        if not node[i]:
+            continue
+        r, c = pix[i] // w, pix[i] % w
+        for dr, dc in ((-1, -1), (-1, 0), (-1, 1), (0, -1)):
+            r2, c2 = r + dr, c + dc
+            if 0 <= r2 < h and 0 <= c2 < w:
+                j = ids[r2, c2] - 1
+                if j >= 0 and node[j]:
+                    _union(parent, i, j)
+    anchored = np.zeros(n, dtype=np.bool_)
+    for i in range(n):
+        if kept[i]:
+            anchored[_find(parent, i)] = True
+    dropped = False
+    for i in range(n):
+        r, c = pix[i] // w, pix[i] % w
+        ids[r, c] = 0
+        if not (node[i] and anchored[_find(parent, i)]):
+            profile[r, c] = 0.0
+            crease[r, c] = 0.0
+            dropped = True
+    return dropped
+
+
+@njit(parallel=True, cache=True)
+def finish_lines(ink, k, signed, out):
+    """``out`` (h, w): the ``k x k`` block means of ``ink`` clipped to [0, 1], NaN samples left
+    out (``GBuffer.downsample``); with ``signed``, the clipped mean of the positive part
+    minus that of the negative part (as ``edges._finish_signed`` takes them)."""
+    oh, ow = out.shape
+    for r in prange(oh):
+        r = np.int64(r)
+        for col in range(ow):
+            tp = 0.0
+            tn = 0.0
+            n = 0
+            for i in range(r * k, r * k + k):
+                for j in range(col * k, col * k + k):
+                    v = ink[i, j]
+                    if not np.isnan(v):
+                        if signed:
+                            tp += max(v, np.float32(0.0))
+                            tn += max(-v, np.float32(0.0))
+                        else:
+                            tp += v
+                        n += 1
+            if n == 0:
+                out[r, col] = np.float32(np.nan)
+                continue
+            p = np.float32(tp / n)
+            p = min(max(p, np.float32(0.0)), np.float32(1.0))
+            if signed:
+                q = np.float32(tn / n)
+                q = min(max(q, np.float32(0.0)), np.float32(1.0))
+                out[r, col] = p - q
+            else:
+                out[r, col] = p

@@ -25,10 +25,10 @@ captured with ``supersample > 1``.
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Sequence
 
 import numpy as np
-from scipy import ndimage
 
 from .. import _validate
 from ..core.gbuffer import GBuffer, check_gbuffer
@@ -97,10 +97,12 @@ def _kernel_inputs(gb: GBuffer) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.
 
 
 def _pair_edges(gb: GBuffer, depth_jump: float, crease_angle: float, creases: bool = True):
+    """One-pixel profile and signed crease images (per-thread scratch: valid until the next
+    call of this module in the same thread)."""
     parallel, inv_d, inv_w = _camera_terms(gb)
     h, w = gb.shape
-    profile = np.empty((h, w), dtype=np.float32)
-    crease = np.empty((h, w), dtype=np.float32)
+    profile = _scratch("profile", (h, w), np.float32)
+    crease = _scratch("crease", (h, w), np.float32)
     _k.edge_pass(
         *_kernel_inputs(gb),
         parallel,
@@ -130,7 +132,8 @@ def _outline(mask: np.ndarray) -> np.ndarray:
 def _clean(
     gb: GBuffer, profile: np.ndarray, crease: np.ndarray, min_length: float
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Speck removal and hysteresis on the one-pixel line images of :func:`_pair_edges`.
+    """Speck removal and hysteresis on the one-pixel line images of :func:`_pair_edges`
+    (modified in place and returned).
 
     The lines of both images form one drawing, so they are judged together. A connected
     (8-neighbour) piece of strong ink (>= 0.5: a jump of at least 1.5 ``depth_jump`` or a
@@ -139,30 +142,34 @@ def _clean(
     small); weak ink stays only where it is connected to a strong piece that stays (Canny's
     hysteresis: it continues lines, it does not start them). Noise of a scanned or decimated
     surface leaves short isolated marks; the short edges of a real feature (a cube's corner)
-    are joined to the lines they meet and stay.
+    are joined to the lines they meet and stay. Union-find over the ink pixels alone
+    (:func:`._edge_kernels.clean_lines`): the same components as labelling the whole image.
     """
-    eight = np.ones((3, 3), dtype=bool)
-    strong = (profile >= 0.5) | (np.abs(crease) >= 0.5)
-    pieces, n = ndimage.label(strong, structure=eight)
-    keep = np.ones(n + 1, dtype=bool)
-    length = min_length * gb.supersample
-    if n and length > 0:
-        sizes = np.bincount(pieces.ravel(), minlength=n + 1)
-        outline = np.zeros(n + 1, dtype=bool)
-        outline[pieces[_outline(np.asarray(gb.mask, dtype=bool))]] = True
-        keep = (sizes >= length) | outline
-    keep[0] = False
-    kept = keep[pieces]
-    ink = (profile > 0.0) | (crease != 0.0)
-    lines, m = ndimage.label(ink & ~(strong & ~kept), structure=eight)
-    anchored = np.zeros(m + 1, dtype=bool)
-    anchored[lines[kept]] = True
-    anchored[0] = False
-    stay = anchored[lines]
-    if stay.sum() == ink.sum():
-        return profile, crease
-    zero = np.float32(0.0)
-    return np.where(stay, profile, zero), np.where(stay, crease, zero)
+    ids = _scratch("ids", profile.shape, np.int32, zero=True)
+    mask = np.ascontiguousarray(gb.mask, dtype=np.bool_)
+    _k.clean_lines(profile, crease, mask, float(min_length * gb.supersample), ids)
+    return profile, crease
+
+
+_SCRATCH = threading.local()
+
+
+def _scratch(name: str, shape: tuple[int, ...], dtype: type, zero: bool = False) -> np.ndarray:
+    """A buffer-sized intermediate image, kept per thread between calls.
+
+    The one-pixel line images live only within one call of this module's functions; a fresh
+    one is page-faulted in on every call (16 MB at 2048^2, ~1-2 ms/MB on a VM that hands free
+    memory back to its host), which costs more than the kernels that fill it. ``zero``: the
+    buffer is all 0 when first made and its user leaves it so (:func:`_clean`'s ids).
+    """
+    pool = getattr(_SCRATCH, "pool", None)
+    if pool is None:
+        pool = _SCRATCH.pool = {}
+    buf = pool.get(name)
+    if buf is None or buf.shape != tuple(shape) or buf.dtype != dtype:
+        buf = np.zeros(shape, dtype=dtype) if zero else np.empty(shape, dtype=dtype)
+        pool[name] = buf
+    return buf
 
 
 def _lines(
@@ -211,22 +218,30 @@ def _dilate(ink: np.ndarray, size: int) -> np.ndarray:
 
 
 def _finish(gb: GBuffer, *inks: np.ndarray, width: float) -> list[np.ndarray]:
-    """Dilate one-pixel line images to ``width`` output pixels and reduce them to output size.
-
-    Several images are reduced in one pass (as channels of one array): same values, one
-    traversal of the buffers.
-    """
+    """Dilate one-pixel line images to ``width`` output pixels and reduce them to output size
+    (box filter and clip to [0, 1] in one pass, :func:`._edge_kernels.finish_lines`)."""
     size = max(1, round(width * gb.supersample))
-    if size > 1:
-        inks = tuple(_dilate(ink, size) for ink in inks)
-    stacked = inks[0] if len(inks) == 1 else np.stack(inks, axis=-1)
-    small = np.clip(gb.downsample(stacked), 0.0, 1.0).astype(np.float32, copy=False)
-    return [small] if len(inks) == 1 else [small[..., i] for i in range(len(inks))]
+    k = _validate.count(gb.supersample, "gb.supersample", "supersample")
+    res = []
+    for ink in inks:
+        if size > 1:
+            ink = _dilate(ink, size)
+        out = np.empty(gb.output_shape, dtype=np.float32)
+        _k.finish_lines(np.ascontiguousarray(ink, dtype=np.float32), k, False, out)
+        res.append(out)
+    return res
 
 
 def _finish_signed(gb: GBuffer, signed: np.ndarray, width: float) -> np.ndarray:
-    pos, neg = _finish(gb, np.maximum(signed, 0.0), np.maximum(-signed, 0.0), width=width)
-    return (pos - neg).astype(np.float32, copy=False)
+    """:func:`_finish` of the positive and the negative part, the second subtracted; one pass
+    where no dilation is needed."""
+    if max(1, round(width * gb.supersample)) > 1:
+        pos, neg = _finish(gb, np.maximum(signed, 0.0), np.maximum(-signed, 0.0), width=width)
+        return (pos - neg).astype(np.float32, copy=False)
+    k = _validate.count(gb.supersample, "gb.supersample", "supersample")
+    out = np.empty(gb.output_shape, dtype=np.float32)
+    _k.finish_lines(np.ascontiguousarray(signed, dtype=np.float32), k, True, out)
+    return out
 
 
 def profile_edges(
@@ -400,8 +415,8 @@ def edge_map(
     h, w = gb.shape
     # One pass: the 2003 inner edges with the depth's own creases added (data whose normals
     # are smoothed across real creases), and the 2003 profile, as two planar images.
-    inner = np.empty((h, w), dtype=np.float32)
-    alpha = np.empty((h, w), dtype=np.float32)
+    inner = _scratch("profile", (h, w), np.float32)
+    alpha = _scratch("crease", (h, w), np.float32)
     _k.edge_pass(
         *_kernel_inputs(gb),
         parallel,
