@@ -119,16 +119,6 @@ def _pair_edges(gb: GBuffer, depth_jump: float, crease_angle: float, creases: bo
     return profile, crease
 
 
-def _outline(mask: np.ndarray) -> np.ndarray:
-    """Covered pixels with a 4-neighbour inside the image that is not covered."""
-    out = np.zeros_like(mask)
-    out[:, :-1] |= ~mask[:, 1:]
-    out[:, 1:] |= ~mask[:, :-1]
-    out[:-1, :] |= ~mask[1:, :]
-    out[1:, :] |= ~mask[:-1, :]
-    return out & mask
-
-
 def _clean(
     gb: GBuffer, profile: np.ndarray, crease: np.ndarray, min_length: float
 ) -> tuple[np.ndarray, np.ndarray]:
