@@ -573,17 +573,37 @@ def _ring_fill(sz, depth, m, row, a, b, h, w, parallel, inv_d, inv_w, eyes, S, D
             S[s, c + 2] = 0.0
             D[s, c + 2] = 0.0
         return
-    for c in range(a, b):
-        v = sz[row, c]
-        V[s, c + 2] = m[row, c] and (v - v == 0.0)
-        S[s, c + 2] = np.float64(v)
-        D[s, c + 2] = np.float64(depth[row, c])
+    n = b - a
+    _fill_row(
+        sz[row, a:], depth[row, a:], m[row, a:], n, S[s, a + 2 :], D[s, a + 2 :], V[s, a + 2 :]
+    )
     if eyes:
-        for c in range(a, b):
-            x, y, z = _eye(depth, row, c, h, w, parallel, inv_d, inv_w)
-            EX[s, c + 2] = x
-            EY[s, c + 2] = y
-            EZ[s, c + 2] = z
+        _eye_row(
+            depth[row, a:], a, n, 0.5 * h - row - 0.5, w, parallel, inv_d, inv_w,
+            EX[s, a + 2 :], EY[s, a + 2 :], EZ[s, a + 2 :],
+        )  # fmt: skip
+
+
+@njit(cache=True, error_model="numpy")
+def _fill_row(szr, dr, mr, n, S, D, V):
+    """sz, depth (as float64) and validity (:func:`_valid`) of ``n`` pixels of a row."""
+    for i in range(n):
+        v = szr[i]
+        V[i] = mr[i] & (v - v == 0.0)
+        S[i] = np.float64(v)
+        D[i] = np.float64(dr[i])
+
+
+@njit(cache=True, error_model="numpy")
+def _eye_row(dr, c0, n, y_row, w, parallel, inv_d, inv_w, EX, EY, EZ):
+    """:func:`_eye` of ``n`` pixels of a row from column ``c0``, the same arithmetic
+    (``y_row`` is its ``0.5 * h - r - 0.5``)."""
+    for i in range(n):
+        z = np.float64(dr[i])
+        k = 1.0 if parallel else z * inv_d
+        EX[i] = ((c0 + i) + 0.5 - 0.5 * w) * k
+        EY[i] = y_row * k
+        EZ[i] = -z * inv_w
 
 
 @njit(cache=True, error_model="numpy")
@@ -765,8 +785,14 @@ def _profile_at(V, S, cur_g, up_g, r, c, h, w, jump):
 
 @njit(cache=True, error_model="numpy")
 def _turn_row(V0, V3, X0, Y0, Z0, X1, Y1, Z1, X2, Y2, Z2, X3, Y3, Z3, n, cos_min, may):
-    """The first test of :func:`_depth_crease` for ``n`` pairs of a row: the segments P0 -> P1 and
-    P2 -> P3 (eye positions; P0 and P3 must be valid) turn by more than the threshold."""
+    """The first test of :func:`_depth_crease` for ``n`` pairs of a row, without its root:
+    False only where the segments P0 -> P1 and P2 -> P3 (eye positions; P0 and P3 valid)
+    certainly turn by less than the threshold. ``dot >= cos_min |a| |b|`` is implied by
+    ``dot^2 >= cos_min^2 |a|^2 |b|^2 (1 + 1e-9)`` for ``dot > 0`` (the margin is far beyond
+    round-off), and by ``dot >= 0`` if ``cos_min <= 0``; pairs between the two forms are
+    candidates, which :func:`_depth_crease` then tests exactly."""
+    c2 = cos_min * cos_min * (1.0 + 1e-9)
+    wide = cos_min <= 0.0
     for i in range(n):
         ax = X1[i] - X0[i]
         ay = Y1[i] - Y0[i]
@@ -775,8 +801,9 @@ def _turn_row(V0, V3, X0, Y0, Z0, X1, Y1, Z1, X2, Y2, Z2, X3, Y3, Z3, n, cos_min
         by = Y3[i] - Y2[i]
         bz = Z3[i] - Z2[i]
         dot = ax * bx + ay * by + az * bz
-        norms = math.sqrt((ax * ax + ay * ay + az * az) * (bx * bx + by * by + bz * bz))
-        may[i] = V0[i] & V3[i] & (not (dot >= cos_min * norms))
+        prod = (ax * ax + ay * ay + az * az) * (bx * bx + by * by + bz * bz)
+        straight = (dot >= 0.0) if wide else ((dot > 0.0) & (dot * dot >= c2 * prod))
+        may[i] = V0[i] & V3[i] & (not straight)
 
 
 @njit(cache=True, error_model="numpy")
@@ -1208,6 +1235,23 @@ def _edge_map_row(
     _combine_row(inner_row, cre_row, prof, n, out_a, out_b)
 
 
+@njit(cache=True, error_model="numpy")
+def _block_row(src, k, ow, acc, cnt):
+    """Sums and counts of the non-NaN samples of ``k`` rows of ``src`` over blocks of ``k``
+    columns (the first ``ow`` blocks), in the order ``GBuffer.downsample`` adds them."""
+    for j in range(ow):
+        acc[j] = 0.0
+        cnt[j] = 0
+    for i in range(k):
+        row = src[i]
+        for q in range(k):
+            for j in range(ow):
+                v = row[j * k + q]
+                ok = v == v
+                acc[j] += np.float64(v) if ok else 0.0
+                cnt[j] += 1 if ok else 0
+
+
 @njit(parallel=True, cache=True)
 def edge_map_finish(inner, alpha, k, out):
     """``out`` (h, w, 4): the ``k x k`` block means of ``inner`` (into R, G, B) and ``alpha``
@@ -1216,18 +1260,13 @@ def edge_map_finish(inner, alpha, k, out):
     oh, ow = out.shape[0], out.shape[1]
     for r in prange(oh):
         r = np.int64(r)
-        for col in range(ow):
-            for ch in range(2):
-                src = inner if ch == 0 else alpha
-                total = 0.0
-                n = 0
-                for i in range(r * k, r * k + k):
-                    for j in range(col * k, col * k + k):
-                        v = src[i, j]
-                        if not np.isnan(v):
-                            total += v
-                            n += 1
-                v = np.float32(total / n) if n > 0 else np.float32(np.nan)
+        acc = np.empty(ow, dtype=np.float64)
+        cnt = np.empty(ow, dtype=np.int64)
+        for ch in range(2):
+            _block_row((inner if ch == 0 else alpha)[r * k : r * k + k], k, ow, acc, cnt)
+            for col in range(ow):
+                n = cnt[col]
+                v = np.float32(acc[col] / n) if n > 0 else np.float32(np.nan)
                 if v < 0.0:
                     v = np.float32(0.0)
                 elif v > 1.0:
@@ -1363,27 +1402,34 @@ def finish_lines(ink, k, signed, out):
     oh, ow = out.shape
     for r in prange(oh):
         r = np.int64(r)
+        tp = np.empty(ow, dtype=np.float64)
+        tn = np.empty(ow, dtype=np.float64)
+        cnt = np.empty(ow, dtype=np.int64)
+        for j in range(ow):
+            tp[j] = 0.0
+            tn[j] = 0.0
+            cnt[j] = 0
+        for i in range(r * k, r * k + k):
+            row = ink[i]
+            for q in range(k):
+                for j in range(ow):
+                    v = row[j * k + q]
+                    ok = v == v
+                    cnt[j] += 1 if ok else 0
+                    if signed:
+                        tp[j] += np.float64(max(v, np.float32(0.0))) if ok else 0.0
+                        tn[j] += np.float64(max(-v, np.float32(0.0))) if ok else 0.0
+                    else:
+                        tp[j] += np.float64(v) if ok else 0.0
         for col in range(ow):
-            tp = 0.0
-            tn = 0.0
-            n = 0
-            for i in range(r * k, r * k + k):
-                for j in range(col * k, col * k + k):
-                    v = ink[i, j]
-                    if not np.isnan(v):
-                        if signed:
-                            tp += max(v, np.float32(0.0))
-                            tn += max(-v, np.float32(0.0))
-                        else:
-                            tp += v
-                        n += 1
+            n = cnt[col]
             if n == 0:
                 out[r, col] = np.float32(np.nan)
                 continue
-            p = np.float32(tp / n)
+            p = np.float32(tp[col] / n)
             p = min(max(p, np.float32(0.0)), np.float32(1.0))
             if signed:
-                q = np.float32(tn / n)
+                q = np.float32(tn[col] / n)
                 q = min(max(q, np.float32(0.0)), np.float32(1.0))
                 out[r, col] = p - q
             else:
