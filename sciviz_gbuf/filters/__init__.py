@@ -5,7 +5,15 @@ line images are ink in [0, 1] with 1 = full ink (signed images are documented as
 from .bands import BATHYMETRIC, HYPSOMETRIC, color_bands, composite_map
 from .contour_vectors import ContourPolyline, contour_polylines, polylines_to_geojson
 from .contours import band_heights, contour_lines, hatching
-from .edges import crease_edges, edge_map, enhance, id_edges, internal_edges, profile_edges
+from .edges import (
+    crease_edges,
+    edge_map,
+    enhance,
+    id_edges,
+    internal_edges,
+    profile_and_crease_edges,
+    profile_edges,
+)
 from .hillshade import fill_nodata_ring, hillshade
 from .operators import (
     c1_discontinuity,
@@ -46,6 +54,7 @@ __all__ = [
     "lambert",
     "normalize_gradient",
     "polylines_to_geojson",
+    "profile_and_crease_edges",
     "profile_edges",
     "reflection_angle",
     "reflection_lines",

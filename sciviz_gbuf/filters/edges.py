@@ -43,6 +43,7 @@ __all__ = [
     "enhance",
     "id_edges",
     "internal_edges",
+    "profile_and_crease_edges",
     "profile_edges",
 ]
 
@@ -334,6 +335,37 @@ def crease_edges(
     _check_params(depth_jump, crease_angle, width)
     _, crease = _lines(gb, depth_jump, crease_angle, _check_min_length(min_length))
     return _finish(gb, np.abs(crease), width=width)[0]
+
+
+def profile_and_crease_edges(
+    gb: GBuffer,
+    *,
+    crease_angle: float = DEFAULT_CREASE_ANGLE,
+    depth_jump: float = DEFAULT_DEPTH_JUMP,
+    width: float = 1.0,
+    min_length: float = DEFAULT_MIN_LENGTH,
+    signed: bool = True,
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(profile_edges(gb, ...), internal_edges(gb, ...))`` (``signed``) or
+    ``(profile_edges(gb, ...), crease_edges(gb, ...))``, the same arrays, in one pass where
+    they share it: both are cleaned together with the crease lines at ``crease_angle``, so at
+    the default angle (the one :func:`profile_edges` judges its pieces with) the lines are
+    found and cleaned once for both (1990 §3.2: one G-buffer, every edge image).
+    """
+    gb = _check_gb(gb)
+    _check_params(depth_jump, crease_angle, width)
+    min_length = _check_min_length(min_length)
+    signed = _validate.boolean(signed, "signed")
+    if float(crease_angle) != DEFAULT_CREASE_ANGLE or min_length == 0:
+        # profile_edges cleans with the default angle (and skips creases without cleaning)
+        prof = profile_edges(gb, depth_jump=depth_jump, width=width, min_length=min_length)
+        _, crease = _lines(gb, depth_jump, crease_angle, min_length)
+    else:
+        profile, crease = _lines(gb, depth_jump, crease_angle, min_length)
+        prof = _finish(gb, profile, width=width)[0]
+    if signed:
+        return prof, _finish_signed(gb, crease, width)
+    return prof, _finish(gb, np.abs(crease), width=width)[0]
 
 
 def id_edges(gb: GBuffer, *, ids: str = "object", width: float = 1.0) -> np.ndarray:

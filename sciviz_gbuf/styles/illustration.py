@@ -14,7 +14,7 @@ import numpy as np
 from .. import _validate
 from ..core.gbuffer import GBuffer, check_gbuffer
 from ..errors import InputError
-from ..filters import crease_edges, edge_map, enhance, internal_edges, lambert, profile_edges
+from ..filters import edge_map, enhance, lambert, profile_and_crease_edges, profile_edges
 from ..filters.edges import INNER_COLOR
 from ._ink import clump_cut
 from .registry import check_style, register, styles_for
@@ -177,8 +177,9 @@ def line_ink(
     """The ink of the ``lines`` style: profile and crease lines, clumps thinned to their
     skeleton (see :func:`thin_edge_map`). (H, W) float32 in [0, 1] at the output size."""
     ink = np.maximum(
-        profile_edges(gb, depth_jump=depth_jump, width=width),
-        crease_edges(gb, crease_angle=crease_angle, depth_jump=depth_jump, width=width),
+        *profile_and_crease_edges(
+            gb, crease_angle=crease_angle, depth_jump=depth_jump, width=width, signed=False
+        )
     )
     return _thinned(ink, width)
 
@@ -197,8 +198,9 @@ def fig7_edge_map(
     be drawn black), clumps of them thinned to their skeleton (see :func:`thin_edge_map`).
     ``black_only``: all internal edges in A (Fig. 7 (c'), absolute values).
     """
-    inner = internal_edges(gb, crease_angle=crease_angle, depth_jump=depth_jump, width=width)
-    prof = profile_edges(gb, depth_jump=depth_jump, width=width)
+    prof, inner = profile_and_crease_edges(
+        gb, crease_angle=crease_angle, depth_jump=depth_jump, width=width
+    )
     return edges_to_map(inner, prof, black_only=black_only, width=width)
 
 

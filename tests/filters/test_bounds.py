@@ -67,6 +67,7 @@ def _suppress(gb, **kw):
 # on a small input and the leading shape of their result (None: not an image).
 OTHER_FILTERS = {
     "enhance": (_enhance, (N, N)),
+    "profile_and_crease_edges": (lambda gb, **kw: F.profile_and_crease_edges(gb, **kw)[1], "gb"),
     "suppress_zeroth_order": (_suppress, (N, N)),
     "composite_map": (_composite, (N, N)),
     "contour_polylines": (

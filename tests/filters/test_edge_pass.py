@@ -232,3 +232,17 @@ def test_one_pass_finish_equals_downsample_and_clip(captures):
             pos = reference(gb, np.maximum(signed, 0.0), width)
             neg = reference(gb, np.maximum(-signed, 0.0), width)
             np.testing.assert_array_equal(E._finish_signed(gb, signed, width), pos - neg, name)
+
+
+@pytest.mark.parametrize(
+    "kw",
+    [{}, {"crease_angle": 45.0}, {"min_length": 0.0}, {"width": 2.0, "depth_jump": 2.0}],
+)
+def test_profile_and_crease_edges_are_the_separate_calls(captures, kw):
+    for name, gb in captures[::2]:
+        prof, inner = E.profile_and_crease_edges(gb, **kw)
+        own = {k: v for k, v in kw.items() if k != "crease_angle"}
+        np.testing.assert_array_equal(prof, E.profile_edges(gb, **own), name)
+        np.testing.assert_array_equal(inner, E.internal_edges(gb, **kw), name)
+        _, crease = E.profile_and_crease_edges(gb, signed=False, **kw)
+        np.testing.assert_array_equal(crease, E.crease_edges(gb, **kw), name)
