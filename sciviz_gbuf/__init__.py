@@ -8,7 +8,7 @@ image-space enhancements on them (:mod:`sciviz_gbuf.filters`), following Saito &
 from __future__ import annotations
 
 from .core.camera import CameraInfo
-from .core.capture import capture
+from .core.capture import CaptureSession, capture
 from .core.gbuffer import GBuffer
 from .errors import InputError, OutputError, RenderError, SciVizGBufError
 from .recipes.birdseye import birdseye_map, sumi_e
@@ -21,6 +21,7 @@ __version__ = "0.1.0"
 
 __all__ = [
     "CameraInfo",
+    "CaptureSession",
     "GBuffer",
     "InputError",
     "OutputError",

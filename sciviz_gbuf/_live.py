@@ -4,7 +4,9 @@ Why not a render pass: PyVista installs its own passes with ``renderer.SetPass``
 shadows, depth peeling) and overwrites ours. Instead, every time the render window starts a
 frame (its ``StartEvent``) we check whether the view or the scene of the enhanced renderer
 changed since the last frame; if so we capture that renderer's scene offscreen in a *separate*
-window (:func:`sciviz_gbuf.capture`, its own render window, so no re-entry into the user's),
+window (a :class:`~sciviz_gbuf.core.capture.CaptureSession`, its own render window, so no
+re-entry into the user's; kept while the scene stays the same, so a new view only renders the
+visibility buffer again: the surfaces, their normals and the uploaded geometry are reused),
 compute the edge map and upload it as an RGBA image. The image is drawn by a ``vtkActor2D``
 (``vtkImageMapper``, one texel per pixel) in an overlay ``vtkRenderer`` on a new top layer with
 the enhanced renderer's viewport: so it is composited (alpha blending) over exactly that
@@ -38,7 +40,7 @@ from vtkmodules.vtkCommonDataModel import vtkImageData
 from vtkmodules.vtkRenderingCore import vtkActor2D, vtkImageMapper, vtkRenderer
 
 from . import _validate
-from .core.capture import capture
+from .core.capture import CaptureSession
 from .core.gbuffer import GBuffer
 from .errors import InputError
 from .filters import crease_edges, edge_map, profile_edges
@@ -233,6 +235,10 @@ class LiveEdges:
         self._overlay.SetInteractive(False)  # picking and interaction go to the subplot below
         self._overlay.AddViewProp(self._actor)
         self._window: Any = None
+        # The scene's capture session (surfaces, triangle soup, offscreen window with the
+        # geometry uploaded) while the scene stays the same; a new view only re-renders ids.
+        self._session: CaptureSession | None = None
+        self._scene_key: object = None
         self._observer: int | None = None
         self._layer: int | None = None
         self._warned_client_side = False
@@ -279,6 +285,13 @@ class LiveEdges:
             window.SetNumberOfLayers(needed)
         self._layer = None
         self._key = None
+        self._close_session()
+
+    def _close_session(self) -> None:
+        if self._session is not None:
+            self._session.close()
+        self._session = None
+        self._scene_key = None
 
     # ------------------------------------------------------------------ per frame
     def _on_plotter_render(self, plotter: Any) -> None:
@@ -305,8 +318,18 @@ class LiveEdges:
             cam.GetWindowCenter(),
             cam.GetUseHorizontalViewAngle(),
         )
+        return (
+            cam_key,
+            tuple(ren.GetSize()),
+            tuple(ren.GetViewport()),
+            self._props_key(),
+        )
+
+    def _props_key(self) -> tuple:
+        """The scene of the renderer: its actors, their visibility, transforms and data; the
+        capture session is kept while it is the same."""
         props = []
-        for name, actor in ren.actors.items():
+        for name, actor in self._renderer.actors.items():
             mapper = actor.GetMapper() if hasattr(actor, "GetMapper") else None
             data = mapper.GetInputDataObject(0, 0) if mapper is not None else None
             # VTK addresses, not id(): the Python wrappers may be new objects on each access
@@ -320,12 +343,7 @@ class LiveEdges:
                     data.GetMTime() if data is not None else 0,
                 )
             )
-        return (
-            cam_key,
-            tuple(ren.GetSize()),
-            tuple(ren.GetViewport()),
-            tuple(props),
-        )
+        return tuple(props)
 
     def _on_start(self, _obj: object, _event: str) -> None:
         if self._busy:  # our own capture never renders this window, but never loop anyway
@@ -351,23 +369,25 @@ class LiveEdges:
         w, h = (int(v) for v in ren.GetSize())
         if w < 1 or h < 1:
             return None
-        renderers = self._plotter.renderers
-        old = renderers.active_index
-        # capture(plotter) reads the active renderer's actors: point it at ours meanwhile
-        _activate(renderers, next(i for i, r in enumerate(renderers) if r is ren))
-        try:
-            return capture(
-                self._plotter,
-                window_size=(w, h),
-                camera=ren.GetActiveCamera(),
-                supersample=self.params.supersample,
-            )
-        except InputError as exc:
-            if "no visible actor" in str(exc):
-                return None  # an empty subplot has no edges
-            raise
-        finally:
-            _activate(renderers, old)
+        key = self._props_key()
+        if self._session is None or key != self._scene_key:
+            self._close_session()
+            renderers = self._plotter.renderers
+            old = renderers.active_index
+            # the session reads the active renderer's actors: point it at ours meanwhile
+            _activate(renderers, next(i for i, r in enumerate(renderers) if r is ren))
+            try:
+                self._session = CaptureSession(self._plotter)
+            except InputError as exc:
+                if "no visible actor" in str(exc):
+                    return None  # an empty subplot has no edges
+                raise
+            finally:
+                _activate(renderers, old)
+            self._scene_key = key
+        return self._session.capture(
+            window_size=(w, h), camera=ren.GetActiveCamera(), supersample=self.params.supersample
+        )
 
     def update(self) -> None:
         """Capture now and upload a new overlay (called by the frame observer)."""

@@ -5,7 +5,7 @@ makes: a :class:`GBuffer` of float32 channels and its :class:`CameraInfo`.
 """
 
 from .camera import VIEWS, CameraInfo
-from .capture import capture
+from .capture import CaptureSession, capture
 from .framing import framed_camera, named_view_camera, oblique_camera, terrain_birdseye_camera
 from .gbuffer import GBuffer, check_gbuffer
 from .isosurface import isosurface
@@ -13,6 +13,7 @@ from .isosurface import isosurface
 __all__ = [
     "VIEWS",
     "CameraInfo",
+    "CaptureSession",
     "GBuffer",
     "capture",
     "check_gbuffer",

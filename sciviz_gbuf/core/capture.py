@@ -29,6 +29,7 @@ __all__ = [
     "BYTES_PER_PIXEL",
     "DEFAULT_WINDOW_SIZE",
     "MAX_BUFFER_SIZE",
+    "CaptureSession",
     "capture",
     "check_capture_size",
     "check_scalars",
@@ -311,16 +312,41 @@ def capture(
     if window_size is None:
         window_size = tuple(scene.window_size) if is_plotter(scene) else DEFAULT_WINDOW_SIZE
     width, height, supersample = check_capture_size(window_size, supersample)
-    size = (width * supersample, height * supersample)
-    if not (0.0 <= _validate.finite(feature_angle, "feature_angle") <= 180.0):
-        raise InputError(f"feature_angle: expected degrees in [0, 180], got {feature_angle!r}")
-    names = check_scalars(scalars)
     if up is not None:
         up = check_up(up)
-
     with progress(progress_bar, 4, "capture") as bar:
+        with CaptureSession(scene, feature_angle=feature_angle, scalars=scalars) as session:
+            bar.step("render")
+            return session._capture(
+                (width, height), supersample, camera, parallel_projection, up, bar.step
+            )
+
+
+class CaptureSession:
+    """Captures of one scene from any number of cameras, keeping what does not depend on the
+    camera: the scene's surfaces (triangulated, normals split at ``feature_angle``), their
+    merged triangle soup and the offscreen window with that geometry uploaded. Each
+    :meth:`capture` only renders the visibility buffer and resolves its pixels: what the live
+    overlay and the explorer pay per new view.
+
+    Parameters
+    ----------
+    scene, feature_angle, scalars
+        As in :func:`capture`, read when the session is made: a later change of the scene is
+        not seen (make a new session).
+
+    Use as a context manager, or call :meth:`close` to release the window.
+    """
+
+    def __init__(
+        self, scene: object, *, feature_angle: float = 30.0, scalars: Sequence[str] | str = ()
+    ) -> None:
+        if not (0.0 <= _validate.finite(feature_angle, "feature_angle") <= 180.0):
+            raise InputError(f"feature_angle: expected degrees in [0, 180], got {feature_angle!r}")
+        self.names = check_scalars(scalars)
+        self.scene = scene
         surfaces = collect_surfaces(scene, feature_angle=float(feature_angle))
-        for name in names:
+        for name in self.names:
             if all(s.array(name) is None for s in surfaces):
                 avail = sorted(
                     {
@@ -334,33 +360,71 @@ def capture(
                     f"scalars: no object in the scene has an array named {name!r}; "
                     f"available: {avail}"
                 )
-        points, normals, triangles, tri_obj, tri_cell, n_pts = _merge(surfaces)
-        bar.step("render")
+        self.surfaces = surfaces
+        self._merged = _merge(surfaces)
+        self._renderer: IdRenderer | None = None
+        # The world up of named views, from the scene (its data's file conventions).
+        self._default_up: str | None = None
 
+    def __enter__(self) -> CaptureSession:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Release the offscreen window (the session can still capture: it opens a new one)."""
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+
+    def capture(
+        self,
+        *,
+        window_size: Sequence[int] | None = None,
+        camera: object = None,
+        parallel_projection: bool | None = None,
+        supersample: int = 1,
+        up: str | None = None,
+    ) -> GBuffer:
+        """The G-buffer of the session's scene from ``camera``: the same as
+        :func:`capture` of that scene with these arguments (see there)."""
+        if window_size is None:
+            scene = self.scene
+            window_size = tuple(scene.window_size) if is_plotter(scene) else DEFAULT_WINDOW_SIZE
+        width, height, supersample = check_capture_size(window_size, supersample)
+        if up is not None:
+            up = check_up(up)
+        return self._capture((width, height), supersample, camera, parallel_projection, up)
+
+    def _capture(self, window, supersample, camera, parallel_projection, up, step=None):
+        scene = self.scene
+        size = (window[0] * supersample, window[1] * supersample)
+        points, normals, triangles, tri_obj, tri_cell, n_pts = self._merged
         cam, reset = resolve_camera(camera, scene, parallel_projection)
-        renderer = IdRenderer(points, triangles)
-        try:
-            renderer.window.SetSize(*size)
-            if reset is not None:
-                if up is None:
-                    up = default_up([d for _, d, _ in scene_items(scene)])
-                pos, foc, vup = named_view_camera(
-                    points, reset, aspect=size[0] / size[1], up=up,
-                    view_angle=cam.GetViewAngle(), parallel=bool(cam.GetParallelProjection()),
-                )  # fmt: skip
-                cam.SetPosition(*pos)
-                cam.SetFocalPoint(*foc)
-                cam.SetViewUp(*vup)
-                if cam.GetParallelProjection():
-                    cam.SetParallelScale(
-                        cam.GetDistance() * np.tan(np.radians(cam.GetViewAngle()) / 2)
-                    )
-            _fit_clipping(cam, points)
-            tid = renderer.render(cam, size)
-        finally:
-            renderer.close()
+        if self._renderer is None:
+            self._renderer = IdRenderer(points, triangles)
+        renderer = self._renderer
+        renderer.window.SetSize(*size)
+        if reset is not None:
+            if up is None:
+                if self._default_up is None:
+                    self._default_up = default_up([d for _, d, _ in scene_items(scene)])
+                up = self._default_up
+            pos, foc, vup = named_view_camera(
+                points, reset, aspect=size[0] / size[1], up=up,
+                view_angle=cam.GetViewAngle(), parallel=bool(cam.GetParallelProjection()),
+            )  # fmt: skip
+            cam.SetPosition(*pos)
+            cam.SetFocalPoint(*foc)
+            cam.SetViewUp(*vup)
+            if cam.GetParallelProjection():
+                cam.SetParallelScale(cam.GetDistance() * np.tan(np.radians(cam.GetViewAngle()) / 2))
+        _fit_clipping(cam, points)
+        tid = renderer.render(cam, size)
         info = CameraInfo.from_vtk(cam, size)
-        bar.step("geometry")
+        if step is not None:
+            step("geometry")
 
         inv_clip = np.linalg.inv(info.world_to_clip())
         world, depth, normal, bary = _kernels.resolve_hits(
@@ -384,26 +448,31 @@ def capture(
             info.pixel_size,
             info.parallel_projection,
         )
-        bar.step("attributes")
+        if step is not None:
+            step("attributes")
 
+        surfaces = self.surfaces
         uv = None
         tcs = [s.texture_coordinates() for s in surfaces]
         if any(t is not None for t in tcs):
             uv = _interpolate_point_arrays(tcs, 2, tid, bary, triangles, n_pts)
-        captured = {n: _interpolate_named(surfaces, n, tid, bary, triangles, n_pts) for n in names}
-        bar.step("done")
+        captured = {
+            n: _interpolate_named(surfaces, n, tid, bary, triangles, n_pts) for n in self.names
+        }
+        if step is not None:
+            step("done")
 
-    return GBuffer(
-        depth=depth,
-        sz=sz,
-        normal=normal,
-        world=world,
-        object_id=object_id,
-        cell_id=cell_id,
-        mask=mask,
-        camera=info,
-        uv=uv,
-        scalars=captured,
-        supersample=int(supersample),
-        object_names=[s.name for s in surfaces],
-    )
+        return GBuffer(
+            depth=depth,
+            sz=sz,
+            normal=normal,
+            world=world,
+            object_id=object_id,
+            cell_id=cell_id,
+            mask=mask,
+            camera=info,
+            uv=uv,
+            scalars=captured,
+            supersample=int(supersample),
+            object_names=[s.name for s in surfaces],
+        )
