@@ -1,10 +1,13 @@
 """The one VTK offscreen render of a capture: which triangle is visible in each pixel.
 
 Every triangle of the scene is drawn in a flat, unlit colour that encodes its index (24 bits
-per render, like VTK's own ``vtkHardwareSelector``). The 8-bit framebuffer then carries an
-exact integer per pixel; all float channels are evaluated afterwards from the geometry
-itself (see :mod:`sciviz_gbuf.core._capture_kernels`), so they are exact to float precision
-instead of being interpolated 8-bit colours or a non-linear z-buffer.
+per render, like VTK's own ``vtkHardwareSelector``): a fragment-shader replacement writes
+``gl_PrimitiveID + 1`` as the colour, so the geometry is uploaded once, with its shared
+vertices (cell colours would triple them, and be uploaded again for every pass). The 8-bit
+framebuffer then carries an exact integer per pixel; all float channels are evaluated
+afterwards from the geometry itself (see :mod:`sciviz_gbuf.core._capture_kernels`), so they
+are exact to float precision instead of being interpolated 8-bit colours or a non-linear
+z-buffer.
 """
 
 from __future__ import annotations
@@ -78,17 +81,9 @@ class IdRenderer:
         )
         poly.SetPolys(cells)
         self._poly = poly
-        # index + 1 so that the black background decodes to -1
-        self._codes = np.arange(1, self.n_triangles + 1, dtype=np.int64)
-        self._colors = vtkUnsignedCharArray()
-        self._colors.SetNumberOfComponents(3)
-        poly.GetCellData().SetScalars(self._colors)
-
         mapper = vtkPolyDataMapper()
         mapper.SetInputData(poly)
-        mapper.SetScalarModeToUseCellData()
-        mapper.SetColorModeToDirectScalars()
-        mapper.ScalarVisibilityOn()
+        mapper.ScalarVisibilityOff()
         actor = vtkActor()
         actor.SetMapper(mapper)
         prop = actor.GetProperty()
@@ -98,6 +93,26 @@ class IdRenderer:
         prop.SetSpecular(0.0)
         prop.BackfaceCullingOff()
         prop.FrontfaceCullingOff()
+        # The colour of a fragment: bits [shift, shift + BITS_PER_PASS) of its triangle index + 1
+        # (so that the black background decodes to -1), 8 bits per channel. k / 255 converts to
+        # the 8-bit value k exactly.
+        shader = actor.GetShaderProperty()
+        shader.AddFragmentShaderReplacement(
+            "//VTK::Light::Dec",
+            False,
+            "//VTK::Light::Dec\nuniform int idShift;\nuniform int idMask;\n",
+            False,
+        )
+        shader.AddFragmentShaderReplacement(
+            "//VTK::Light::Impl",
+            False,
+            "//VTK::Light::Impl\n"
+            "  int idCode = ((gl_PrimitiveID + 1) >> idShift) & idMask;\n"
+            "  gl_FragData[0] = vec4(float(idCode & 255) / 255.0, "
+            "float((idCode >> 8) & 255) / 255.0, float((idCode >> 16) & 255) / 255.0, 1.0);\n",
+            False,
+        )
+        self._uniforms = shader.GetFragmentCustomUniforms()
         self.renderer = vtkRenderer()
         self.renderer.AddActor(actor)
         self.renderer.SetBackground(0.0, 0.0, 0.0)
@@ -106,17 +121,6 @@ class IdRenderer:
         self.window = new_render_window()
         self.window.AddRenderer(self.renderer)
 
-    def _set_codes(self, shift: int) -> None:
-        bits = (self._codes >> shift) & 0xFFFFFF
-        rgb = np.empty((self.n_triangles, 3), dtype=np.uint8)
-        rgb[:, 0] = bits & 0xFF
-        rgb[:, 1] = (bits >> 8) & 0xFF
-        rgb[:, 2] = (bits >> 16) & 0xFF
-        arr = numpy_to_vtk(rgb, deep=True, array_type=self._colors.GetDataType())
-        self._colors.DeepCopy(arr)
-        self._colors.Modified()
-        self._poly.GetCellData().Modified()
-
     def render(self, camera, size: tuple[int, int]) -> np.ndarray:
         """Triangle index per pixel, shape (H, W) int64, row 0 on top, -1 for background."""
         width, height = size
@@ -124,7 +128,8 @@ class IdRenderer:
         self.renderer.SetActiveCamera(camera)
         out = np.zeros((height, width), dtype=np.int64)
         for p in range(self.n_passes):
-            self._set_codes(p * BITS_PER_PASS)
+            self._uniforms.SetUniformi("idShift", p * BITS_PER_PASS)
+            self._uniforms.SetUniformi("idMask", (1 << BITS_PER_PASS) - 1)
             self.window.Render()
             actual = tuple(self.window.GetActualSize())
             if actual != (width, height):
