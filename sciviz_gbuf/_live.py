@@ -219,6 +219,7 @@ class LiveEdges:
         self._busy = False
         #: Number of G-buffer captures so far (to check that still frames cost nothing).
         self.updates = 0
+        #: The G-buffer of the last new view (its arrays are rewritten by the next one).
         self.last_gbuffer: GBuffer | None = None
         self._image = vtkImageData()
         self._image.SetDimensions(1, 1, 1)
@@ -386,7 +387,10 @@ class LiveEdges:
                 _activate(renderers, old)
             self._scene_key = key
         return self._session.capture(
-            window_size=(w, h), camera=ren.GetActiveCamera(), supersample=self.params.supersample
+            window_size=(w, h),
+            camera=ren.GetActiveCamera(),
+            supersample=self.params.supersample,
+            reuse=True,  # nothing is kept from frame to frame (last_gbuffer: until the next)
         )
 
     def update(self) -> None:

@@ -12,7 +12,15 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-__all__ = ["accumulate_codes", "interpolate_points", "lookup_cells", "resolve_hits"]
+__all__ = [
+    "accumulate_codes",
+    "interpolate_points",
+    "labels_and_sz",
+    "labels_and_sz_into",
+    "lookup_cells",
+    "resolve_hits",
+    "resolve_hits_into",
+]
 
 # Barycentric overshoot beyond which the hit is clamped onto the triangle. Below it, a pixel
 # centre just outside the exact triangle is the rasteriser's sub-pixel vertex snapping.
@@ -40,9 +48,28 @@ def _cross(ax, ay, az, bx, by, bz):
     return ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
 
 
-@njit(parallel=True, cache=True)
+@njit(cache=True)
 def resolve_hits(tid, points, triangles, normals, inv_clip, eye, view_dir, rot, parallel):
-    """World position, depth, eye-space normal and barycentrics per pixel.
+    """World position, depth, eye-space normal and barycentrics per pixel (new arrays; see
+    :func:`resolve_hits_into`)."""
+    h, w = tid.shape
+    world = np.empty((h, w, 3), dtype=np.float32)
+    depth = np.empty((h, w), dtype=np.float32)
+    nrm = np.empty((h, w, 3), dtype=np.float32)
+    bary = np.empty((h, w, 3), dtype=np.float32)
+    resolve_hits_into(
+        tid, points, triangles, normals, inv_clip, eye, view_dir, rot, parallel,
+        world, depth, nrm, bary,
+    )  # fmt: skip
+    return world, depth, nrm, bary
+
+
+@njit(parallel=True, cache=True)
+def resolve_hits_into(
+    tid, points, triangles, normals, inv_clip, eye, view_dir, rot, parallel, world, depth, nrm, bary
+):
+    """World position, depth, eye-space normal and barycentrics per pixel, into the given
+    arrays (every pixel written: a capture session reuses them frame after frame).
 
     Parameters
     ----------
@@ -53,22 +80,22 @@ def resolve_hits(tid, points, triangles, normals, inv_clip, eye, view_dir, rot, 
     rot : (3, 3) float64 world -> eye rotation.
     parallel : bool, orthographic camera.
 
-    Returns
-    -------
-    world (H, W, 3) f32, depth (H, W) f32, normal (H, W, 3) f32, bary (H, W, 3) f32;
-    NaN on background.
+    world (H, W, 3) f32, depth (H, W) f32, normal (H, W, 3) f32, bary (H, W, 3) f32
+        The outputs; NaN on background.
     """
     h, w = tid.shape
-    world = np.full((h, w, 3), np.nan, dtype=np.float32)
-    depth = np.full((h, w), np.nan, dtype=np.float32)
-    nrm = np.full((h, w, 3), np.nan, dtype=np.float32)
-    bary = np.full((h, w, 3), np.nan, dtype=np.float32)
+    nan = np.float32(np.nan)
     m = inv_clip
     for r in prange(h):
         yn = 2.0 * ((h - 1 - r) + 0.5) / h - 1.0
         for c in range(w):
             t = tid[r, c]
             if t < 0:
+                depth[r, c] = nan
+                for k in range(3):
+                    world[r, c, k] = nan
+                    nrm[r, c, k] = nan
+                    bary[r, c, k] = nan
                 continue
             xn = 2.0 * (c + 0.5) / w - 1.0
             # unproject the pixel centre at the near (z=-1) and far (z=+1) planes
@@ -148,10 +175,9 @@ def resolve_hits(tid, points, triangles, normals, inv_clip, eye, view_dir, rot, 
                 ln = np.sqrt(nx * nx + ny * ny + nz * nz)
             for k in range(3):
                 nrm[r, c, k] = (rot[k, 0] * nx + rot[k, 1] * ny + rot[k, 2] * nz) / ln
-    return world, depth, nrm, bary
 
 
-@njit(parallel=True, cache=True)
+@njit(cache=True)
 def labels_and_sz(tid, depth, tri_obj, tri_cell, dist, pixel, parallel):
     """Object id, cell id and Saito's sz (1990 Eq. 6) per pixel, in one pass.
 
@@ -159,13 +185,24 @@ def labels_and_sz(tid, depth, tri_obj, tri_cell, dist, pixel, parallel):
     plane, ``(2 d - z_v) / w`` (see :meth:`CameraInfo.sz_from_depth`).
     """
     h, w = tid.shape
-    obj = np.full((h, w), -1, dtype=np.int32)
-    cell = np.full((h, w), -1, dtype=np.int64)
-    sz = np.full((h, w), np.nan, dtype=np.float32)
+    obj = np.empty((h, w), dtype=np.int32)
+    cell = np.empty((h, w), dtype=np.int64)
+    sz = np.empty((h, w), dtype=np.float32)
+    labels_and_sz_into(tid, depth, tri_obj, tri_cell, dist, pixel, parallel, obj, cell, sz)
+    return obj, cell, sz
+
+
+@njit(parallel=True, cache=True)
+def labels_and_sz_into(tid, depth, tri_obj, tri_cell, dist, pixel, parallel, obj, cell, sz):
+    """:func:`labels_and_sz` into the given arrays (every pixel written)."""
+    h, w = tid.shape
     for r in prange(h):
         for c in range(w):
             t = tid[r, c]
             if t < 0:
+                obj[r, c] = -1
+                cell[r, c] = -1
+                sz[r, c] = np.nan
                 continue
             obj[r, c] = tri_obj[t]
             cell[r, c] = tri_cell[t]
@@ -174,7 +211,6 @@ def labels_and_sz(tid, depth, tri_obj, tri_cell, dist, pixel, parallel):
                 sz[r, c] = (2.0 * dist - z) / pixel
             else:
                 sz[r, c] = dist * dist / (pixel * z)
-    return obj, cell, sz
 
 
 @njit(parallel=True, cache=True)

@@ -120,13 +120,20 @@ class IdRenderer:
         self.renderer.SetUseDepthPeeling(False)
         self.window = new_render_window()
         self.window.AddRenderer(self.renderer)
+        self._readback = vtkUnsignedCharArray()  # reused: no fresh memory per frame
 
     def render(self, camera, size: tuple[int, int]) -> np.ndarray:
-        """Triangle index per pixel, shape (H, W) int64, row 0 on top, -1 for background."""
+        """Triangle index per pixel, shape (H, W) int64, row 0 on top, -1 for background (the
+        renderer's own array, rewritten by its next render)."""
         width, height = size
         self.window.SetSize(width, height)
         self.renderer.SetActiveCamera(camera)
-        out = np.zeros((height, width), dtype=np.int64)
+        # Only used within one capture: kept for the next (no fresh memory touched per frame).
+        out = getattr(self, "_tid", None)
+        if out is None or out.shape != (height, width):
+            out = self._tid = np.zeros((height, width), dtype=np.int64)
+        else:
+            out.fill(0)
         for p in range(self.n_passes):
             self._uniforms.SetUniformi("idShift", p * BITS_PER_PASS)
             self._uniforms.SetUniformi("idMask", (1 << BITS_PER_PASS) - 1)
@@ -137,7 +144,7 @@ class IdRenderer:
                     f"the offscreen window is {actual[0]}x{actual[1]}, not the requested "
                     f"{width}x{height} (is the size above the OpenGL limit?)"
                 )
-            buf = vtkUnsignedCharArray()
+            buf = self._readback
             if self.window.GetPixelData(0, 0, width - 1, height - 1, 0, buf, 0) == 0:
                 raise RenderError("could not read back the offscreen framebuffer")
             px = vtk_to_numpy(buf).reshape(height, width, 3)

@@ -363,6 +363,7 @@ class CaptureSession:
         self.surfaces = surfaces
         self._merged = _merge(surfaces)
         self._renderer: IdRenderer | None = None
+        self._reused: tuple[np.ndarray, ...] | None = None
         # The world up of named views, from the scene (its data's file conventions).
         self._default_up: str | None = None
 
@@ -386,18 +387,48 @@ class CaptureSession:
         parallel_projection: bool | None = None,
         supersample: int = 1,
         up: str | None = None,
+        reuse: bool = False,
     ) -> GBuffer:
         """The G-buffer of the session's scene from ``camera``: the same as
-        :func:`capture` of that scene with these arguments (see there)."""
+        :func:`capture` of that scene with these arguments (see there).
+
+        ``reuse``: write the buffers into those of the previous ``reuse=True`` capture of the
+        same size (which then change: for a consumer that keeps nothing from frame to frame,
+        like the live overlay); a first touch of fresh memory for every frame can cost more
+        than the capture itself.
+        """
         if window_size is None:
             scene = self.scene
             window_size = tuple(scene.window_size) if is_plotter(scene) else DEFAULT_WINDOW_SIZE
         width, height, supersample = check_capture_size(window_size, supersample)
         if up is not None:
             up = check_up(up)
-        return self._capture((width, height), supersample, camera, parallel_projection, up)
+        reuse = _validate.boolean(reuse, "reuse")
+        return self._capture(
+            (width, height), supersample, camera, parallel_projection, up, reuse=reuse
+        )
 
-    def _capture(self, window, supersample, camera, parallel_projection, up, step=None):
+    def _outputs(self, shape: tuple[int, int], reuse: bool) -> tuple[np.ndarray, ...]:
+        """world, depth, normal, bary, object_id, cell_id, sz arrays of ``shape``."""
+        out = self._reused if reuse else None
+        if out is None or out[1].shape != shape:
+            h, w = shape
+            out = (
+                np.empty((h, w, 3), np.float32),
+                np.empty((h, w), np.float32),
+                np.empty((h, w, 3), np.float32),
+                np.empty((h, w, 3), np.float32),
+                np.empty((h, w), np.int32),
+                np.empty((h, w), np.int64),
+                np.empty((h, w), np.float32),
+            )
+            if reuse:
+                self._reused = out
+        return out
+
+    def _capture(
+        self, window, supersample, camera, parallel_projection, up, step=None, reuse=False
+    ):
         scene = self.scene
         size = (window[0] * supersample, window[1] * supersample)
         points, normals, triangles, tri_obj, tri_cell, n_pts = self._merged
@@ -427,7 +458,8 @@ class CaptureSession:
             step("geometry")
 
         inv_clip = np.linalg.inv(info.world_to_clip())
-        world, depth, normal, bary = _kernels.resolve_hits(
+        world, depth, normal, bary, object_id, cell_id, sz = self._outputs(tid.shape, reuse)
+        _kernels.resolve_hits_into(
             tid,
             points,
             triangles,
@@ -437,9 +469,13 @@ class CaptureSession:
             info.direction,
             np.ascontiguousarray(info.view_matrix_array[:3, :3]),
             info.parallel_projection,
+            world,
+            depth,
+            normal,
+            bary,
         )
         mask = tid >= 0
-        object_id, cell_id, sz = _kernels.labels_and_sz(
+        _kernels.labels_and_sz_into(
             tid,
             depth,
             tri_obj,
@@ -447,6 +483,9 @@ class CaptureSession:
             info.distance,
             info.pixel_size,
             info.parallel_projection,
+            object_id,
+            cell_id,
+            sz,
         )
         if step is not None:
             step("attributes")

@@ -52,3 +52,21 @@ def test_session_checks_like_capture():
         sg.CaptureSession(pv.Sphere(), feature_angle=200)
     with sg.CaptureSession(pv.Sphere()) as session, pytest.raises(InputError, match="window"):
         session.capture(window_size=(0, 10))
+
+
+def test_reused_buffers_are_rewritten_and_equal_fresh_captures():
+    mesh = pv.Sphere(theta_resolution=30, phi_resolution=30)
+    with sg.CaptureSession(mesh) as session:
+        a = session.capture(camera="iso", window_size=(80, 60), reuse=True)
+        depth_a = a.depth.copy()
+        b = session.capture(
+            camera=((0, 4, 1), (0, 0, 0), (0, 0, 1)), window_size=(80, 60), reuse=True
+        )
+        assert b.depth is a.depth  # the same memory, rewritten
+        assert not np.array_equal(depth_a, b.depth, equal_nan=True)
+        _assert_same(
+            b, sg.capture(mesh, camera=((0, 4, 1), (0, 0, 0), (0, 0, 1)), window_size=(80, 60))
+        )
+        c = session.capture(camera="iso", window_size=(80, 60))  # not reused: its own arrays
+        assert c.depth is not b.depth
+        np.testing.assert_array_equal(c.depth, depth_a)
