@@ -70,7 +70,7 @@ def split(mesh: pv.DataSet, size: tuple[int, int], frames: int) -> tuple[float, 
     for _ in range(frames):
         pl.camera.azimuth += 3.0
         t0 = time.perf_counter()
-        gb = session.capture(camera=pl.camera)
+        gb = session.capture(camera=pl.camera, reuse=True)
         t1 = time.perf_counter()
         overlay_rgba(gb, params)
         t2 = time.perf_counter()

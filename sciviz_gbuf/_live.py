@@ -35,7 +35,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from vtkmodules.util.numpy_support import numpy_to_vtk
+from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
 from vtkmodules.vtkCommonDataModel import vtkImageData
 from vtkmodules.vtkRenderingCore import vtkActor2D, vtkImageMapper, vtkRenderer
 
@@ -43,7 +43,7 @@ from . import _validate
 from .core.capture import CaptureSession
 from .core.gbuffer import GBuffer
 from .errors import InputError
-from .filters import crease_edges, edge_map, profile_edges
+from .filters import edge_map, profile_and_crease_edges
 from .styles import check_style, styles_for
 from .styles.illustration import fig7_edge_map
 
@@ -130,6 +130,35 @@ class EdgeParams:
         )
 
 
+def _edge_planes(gb: GBuffer, params: EdgeParams) -> tuple[np.ndarray, np.ndarray]:
+    """The style's inner-edge and profile intensities at the output size."""
+    opts = {"crease_angle": params.crease_angle, "depth_jump": params.depth_jump}
+    if params.style == "enhance":
+        emap = edge_map(gb, operator=params.operator, width=params.width, **opts)
+        return emap[..., 0], emap[..., 3]
+    if params.style == "profile":
+        emap = edge_map(gb, operator=params.operator, width=params.width, **opts)
+        return np.zeros_like(emap[..., 0]), emap[..., 3]
+    if params.style == "lines":
+        prof = np.maximum(*profile_and_crease_edges(gb, width=params.width, signed=False, **opts))
+        return np.zeros_like(prof), prof
+    emap = fig7_edge_map(gb, width=params.width, **opts)  # fig7
+    return emap[..., 0], emap[..., 3]
+
+
+def _inked(
+    inner: np.ndarray, prof: np.ndarray, params: EdgeParams
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Flat indices of the inked pixels, their straight colour (n, 3) and alpha (n,)."""
+    # Only inked pixels need work (a few per cent of a frame): gather them, compose, scatter.
+    ink = np.flatnonzero((inner > 0) | (prof > 0))  # NaN compares False: no ink
+    i = np.clip(inner.reshape(-1)[ink], 0.0, 1.0).astype(np.float32) * params.opacity
+    p = np.clip(prof.reshape(-1)[ink], 0.0, 1.0).astype(np.float32) * params.opacity
+    alpha = i + p - i * p  # 1 - (1 - i)(1 - p): inner edges first, profiles over them
+    premult = np.outer(p, params.profile_color) + np.outer(i * (1.0 - p), params.inner_color)
+    return ink, premult / np.maximum(alpha, 1e-12)[:, None], alpha
+
+
 def overlay_rgba(gb: GBuffer, params: EdgeParams) -> np.ndarray:
     """The overlay image of a G-buffer: (H, W, 4) float32, straight (not premultiplied) alpha.
 
@@ -137,32 +166,12 @@ def overlay_rgba(gb: GBuffer, params: EdgeParams) -> np.ndarray:
     :func:`sciviz_gbuf.filters.enhance` of that image with the style's edge map: inner edges
     first (``lerp(dst, inner_color, R)``), then the profiles (``lerp(., profile_color, A)``).
     """
-    opts = {"crease_angle": params.crease_angle, "depth_jump": params.depth_jump}
-    if params.style == "enhance":
-        emap = edge_map(gb, operator=params.operator, width=params.width, **opts)
-        inner, prof = emap[..., 0], emap[..., 3]
-    elif params.style == "profile":
-        emap = edge_map(gb, operator=params.operator, width=params.width, **opts)
-        inner, prof = np.zeros_like(emap[..., 0]), emap[..., 3]
-    elif params.style == "lines":
-        prof = np.maximum(
-            profile_edges(gb, depth_jump=params.depth_jump, width=params.width),
-            crease_edges(gb, width=params.width, **opts),
-        )
-        inner = np.zeros_like(prof)
-    else:  # fig7
-        emap = fig7_edge_map(gb, width=params.width, **opts)
-        inner, prof = emap[..., 0], emap[..., 3]
+    inner, prof = _edge_planes(gb, params)
     h, w = inner.shape
     out = np.zeros((h, w, 4), np.float32)
-    # Only inked pixels need work (a few per cent of a frame): gather them, compose, scatter.
-    ink = np.flatnonzero((np.nan_to_num(inner) > 0) | (np.nan_to_num(prof) > 0))
-    i = np.clip(inner.reshape(-1)[ink], 0.0, 1.0).astype(np.float32) * params.opacity
-    p = np.clip(prof.reshape(-1)[ink], 0.0, 1.0).astype(np.float32) * params.opacity
-    alpha = i + p - i * p  # 1 - (1 - i)(1 - p): inner edges first, profiles over them
-    premult = np.outer(p, params.profile_color) + np.outer(i * (1.0 - p), params.inner_color)
+    ink, rgb, alpha = _inked(inner, prof, params)
     flat = out.reshape(-1, 4)
-    flat[ink, :3] = premult / np.maximum(alpha, 1e-12)[:, None]
+    flat[ink, :3] = rgb
     flat[ink, 3] = alpha
     return out
 
@@ -222,6 +231,8 @@ class LiveEdges:
         #: The G-buffer of the last new view (its arrays are rewritten by the next one).
         self.last_gbuffer: GBuffer | None = None
         self._image = vtkImageData()
+        self._pixels: np.ndarray | None = None  # numpy view of the uploaded image (_set_ink)
+        self._last_ink = np.zeros(0, np.int64)
         self._image.SetDimensions(1, 1, 1)
         self._set_pixels(np.zeros((1, 1, 4), np.uint8))
         mapper = vtkImageMapper()
@@ -402,8 +413,34 @@ class LiveEdges:
         if gb is None:
             self._set_pixels(np.zeros((1, 1, 4), np.uint8))
             return
-        rgba = overlay_rgba(gb, self.params)
-        self._set_pixels(np.round(rgba * 255.0).astype(np.uint8))
+        self._set_ink(*_edge_planes(gb, self.params))
+
+    def _set_ink(self, inner: np.ndarray, prof: np.ndarray) -> None:
+        """Upload ``np.round(overlay_rgba * 255)`` as uint8, writing only the inked pixels of
+        this frame and clearing those of the last into one kept image: a frame touches a few
+        per cent of its pixels, not four full-size float images."""
+        h, w = inner.shape
+        if self._pixels is None or self._pixels.shape != (h, w, 4):
+            self._set_pixels(np.zeros((h, w, 4), np.uint8))
+            self._pixels = self._pixels_vtk_view()
+            self._last_ink = np.zeros(0, np.int64)
+        ink, rgb, alpha = _inked(inner, prof, self.params)
+        # VTK images start at the bottom row: flat index r * w + c goes to (h - 1 - r) * w + c.
+        flat = self._pixels.reshape(-1, 4)
+        flat[self._last_ink] = 0
+        dst = (h - 1 - ink // w) * w + ink % w
+        # the float32 overlay_rgba stores, rounded as its caller did
+        flat[dst, :3] = np.round(rgb.astype(np.float32) * np.float32(255.0)).astype(np.uint8)
+        flat[dst, 3] = np.round(alpha * np.float32(255.0)).astype(np.uint8)
+        self._last_ink = dst
+        self._image.GetPointData().GetScalars().Modified()
+        self._image.Modified()
+
+    def _pixels_vtk_view(self) -> np.ndarray:
+        """The (H, W, 4) uint8 numpy view of the image's scalars (bottom row first)."""
+        arr = self._image.GetPointData().GetScalars()
+        w, h, _ = self._image.GetDimensions()
+        return vtk_to_numpy(arr).reshape(h, w, 4)
 
     def _set_pixels(self, rgba: np.ndarray) -> None:
         h, w = rgba.shape[:2]
@@ -414,3 +451,4 @@ class LiveEdges:
         arr.SetName("edges")
         self._image.GetPointData().SetScalars(arr)
         self._image.Modified()
+        self._pixels = None  # a new array: the kept view (if any) is not it

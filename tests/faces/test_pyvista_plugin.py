@@ -11,9 +11,11 @@ import numpy as np
 import pytest
 import pyvista as pv
 from pyvista import examples
+from vtkmodules.util.numpy_support import vtk_to_numpy
 
 import sciviz_gbuf as sg
 from sciviz_gbuf import pyvista_plugin
+from sciviz_gbuf._live import overlay_rgba
 from sciviz_gbuf.errors import InputError
 from sciviz_gbuf.filters import edge_map
 from sciviz_gbuf.readers import read_dem
@@ -302,3 +304,22 @@ def test_bad_accessor_arguments(nut):
         pv.ImageData(dimensions=(4, 4, 1)).gbuf.topographic_map()  # no heights array
     with pytest.raises(TypeError):
         nut.gbuf.capture((100, 100))  # keyword-only
+
+
+def test_live_uploaded_pixels_are_the_rounded_overlay(nut):
+    # The overlay is written in place into the kept image (inked pixels only, the last
+    # frame's cleared): frame after frame it equals the rounded overlay_rgba, flipped.
+    pl = pv.Plotter(off_screen=True, window_size=(240, 180))
+    pl.add_mesh(nut)
+    pl.gbuf.enable_edge_enhancement(inner_color=BLUE, profile_color=RED, opacity=0.8)
+    live = pl.gbuf.live
+    pl.screenshot()  # the first frame
+    for step in range(3):
+        if step:
+            pl.camera.azimuth += 25.0
+            pl.render()
+        assert live.updates == step + 1
+        expected = np.round(overlay_rgba(live.last_gbuffer, live.params) * 255.0).astype(np.uint8)
+        got = vtk_to_numpy(live._image.GetPointData().GetScalars()).reshape(180, 240, 4)[::-1]
+        np.testing.assert_array_equal(got, expected)
+    pl.close()
