@@ -25,6 +25,7 @@ __all__ = [
     "edge_map_finish",
     "edge_map_kernel",
     "edge_pass",
+    "enhance_kernel",
     "finish_lines",
     "id_edge_kernel",
     "pair_edge_kernel",
@@ -1434,3 +1435,26 @@ def finish_lines(ink, k, signed, out):
                 out[r, col] = p - q
             else:
                 out[r, col] = p
+
+
+@njit(parallel=True, cache=True)
+def enhance_kernel(img, em, inner_c, prof_c, out):
+    """``edges.enhance`` per pixel: the shade (NaN -> 1, clipped; ``img`` (H, W, 1) is grey,
+    (H, W, 3) RGB), then ``lerp`` to ``inner_c`` by R and to ``prof_c`` by A of the edge map
+    (NaN -> 0, clipped), in float32 as the array expressions take them."""
+    h, w = out.shape[0], out.shape[1]
+    grey = img.shape[2] == 1
+    one = np.float32(1.0)
+    zero = np.float32(0.0)
+    for r in prange(h):
+        for c in range(w):
+            i = em[r, c, 0]
+            i = zero if np.isnan(i) else min(max(i, zero), one)
+            a = em[r, c, 3]
+            a = zero if np.isnan(a) else min(max(a, zero), one)
+            for ch in range(3):
+                v = img[r, c, 0 if grey else ch]
+                v = one if np.isnan(v) else min(max(v, zero), one)
+                v += (inner_c[ch] - v) * i
+                v += (prof_c[ch] - v) * a
+                out[r, c, ch] = v

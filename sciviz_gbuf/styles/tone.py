@@ -13,7 +13,7 @@ Both shade at the buffer size from the eye-space normals and reduce to the outpu
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -21,6 +21,7 @@ from .. import _validate
 from ..core.gbuffer import GBuffer, check_gbuffer
 from ..errors import InputError
 from ..filters import edge_map, enhance
+from . import _tone_kernels as _tk
 from .illustration import LIGHT, PAPER, thin_edge_map
 from .registry import register
 
@@ -94,12 +95,16 @@ def _n_dot_l(gb: GBuffer, light: np.ndarray) -> np.ndarray:
     n = np.asarray(gb.normal, dtype=np.float32)
     # Taken on the raw normals: cleaning the NaN of the background first would copy the whole
     # (H, W, 3) buffer. Surface pixels with a NaN component are redone on cleaned normals.
-    ndl = np.asarray(n @ light, dtype=np.float32)
+    # Summed as the one-pass kernels sum it (``_tone_kernels``), so both give the same bits.
+    ndl = n[..., 0] * light[0]
+    ndl += n[..., 1] * light[1]
+    ndl += n[..., 2] * light[2]
     bad = np.isnan(ndl)
     np.copyto(ndl, np.float32(0.0), where=bad)
     bad &= np.asarray(gb.mask, dtype=bool)
     if bad.any():
-        ndl[bad] = np.nan_to_num(n[bad], nan=0.0) @ light
+        nb = np.nan_to_num(n[bad], nan=0.0)
+        ndl[bad] = nb[:, 0] * light[0] + nb[:, 1] * light[1] + nb[:, 2] * light[2]
     return np.clip(ndl, -1.0, 1.0, out=ndl)
 
 
@@ -107,17 +112,6 @@ def _finish(gb: GBuffer, rgb: np.ndarray) -> np.ndarray:
     """The box filter to output size of the (H, W, 3) float32 colour, paper already outside
     the mask, so silhouettes blend with the background by coverage. ``rgb`` may be reused."""
     out = rgb if gb.supersample == 1 else gb.downsample(rgb)
-    return np.clip(out, 0.0, 1.0, out=out)
-
-
-def _finish_planes(gb: GBuffer, planes: Iterator[np.ndarray]) -> np.ndarray:
-    """:func:`_finish` of the R, G, B planes, filtered one by one as they come (they may share
-    a buffer): the filter is per channel, so this gives the means of the interleaved image
-    without building it at buffer size."""
-    ss = gb.supersample > 1
-    out = np.empty((*(gb.output_shape if ss else gb.shape), 3), dtype=np.float32)
-    for c, plane in enumerate(planes):
-        out[..., c] = gb.downsample(plane) if ss else plane
     return np.clip(out, 0.0, 1.0, out=out)
 
 
@@ -145,33 +139,10 @@ def _edges(
     return enhance(rgb, emap, inner_color=inner_color, profile_color=profile_color)
 
 
-def _gooch_planes(
-    gb: GBuffer, lv: np.ndarray, k_warm: np.ndarray, k_cool: np.ndarray, bg: np.ndarray
-) -> Iterator[np.ndarray]:
-    """The colour ``clip(t k_warm + (1 - t) k_cool)`` channel by channel, paper off the mask.
-
-    Per channel plane the operations are those of the (H, W, 1) x (3,) broadcast, in the same
-    order and precision (so the result is the same to the bit), but each runs over contiguous
-    memory instead of innermost loops three long.
-    """
-    t = _n_dot_l(gb, lv)
-    t += np.float32(1.0)
-    t *= np.float32(0.5)
-    one_minus_t = np.float32(1.0) - t
-    paper = ~np.asarray(gb.mask, dtype=bool)
-    # With t in [0, 1] and both tones in [0, 1 - 2**-20] the float32 blend cannot leave
-    # [0, 1] (three roundings add at most 3 * 2**-24), so the clip would change nothing.
-    clip = max(float(k_warm.max()), float(k_cool.max())) > 1.0 - 2.0**-20
-    plane = np.empty_like(t)
-    tmp = np.empty_like(t)
-    for c in range(3):
-        np.multiply(t, k_warm[c], out=plane)
-        np.multiply(one_minus_t, k_cool[c], out=tmp)
-        plane += tmp
-        if clip:
-            np.clip(plane, 0.0, 1.0, out=plane)
-        np.copyto(plane, bg[c], where=paper)
-        yield plane
+def _gooch_clip(k_warm: np.ndarray, k_cool: np.ndarray) -> bool:
+    """Whether the blend needs its clip: with t in [0, 1] and both tones in [0, 1 - 2**-20]
+    the float32 blend cannot leave [0, 1] (three roundings add at most 3 * 2**-24)."""
+    return max(float(k_warm.max()), float(k_cool.max())) > 1.0 - 2.0**-20
 
 
 def gooch(
@@ -253,7 +224,19 @@ def gooch(
 
     k_cool = cool_c + a * base_c
     k_warm = warm_c + b * base_c
-    rgb = _finish_planes(gb, _gooch_planes(gb, lv, k_warm, k_cool, bg))
+    # The shade per buffer pixel and its box filter to output size in one pass.
+    rgb = np.empty((*gb.output_shape, 3), dtype=np.float32)
+    _tk.gooch_shade(
+        np.ascontiguousarray(gb.normal, dtype=np.float32),
+        np.ascontiguousarray(gb.mask, dtype=np.bool_),
+        lv,
+        k_warm.astype(np.float32),
+        k_cool.astype(np.float32),
+        bg,
+        _gooch_clip(k_warm, k_cool),
+        _validate.count(gb.supersample, "gb.supersample", "supersample"),
+        rgb,
+    )
     if not edges:
         return rgb
     return _edges(
@@ -447,7 +430,20 @@ def toon(
     if edges:  # before any image is made (edge_map checks the rest)
         _validate.size(width, "width", "line_width", low=1.0, closed=True)
 
-    rgb = _finish(gb, _toon_colour(gb, lv, table, sm, bg))
+    if sm == 0.0 or table.shape[0] == 1:
+        # Flat shade levels: texel per buffer pixel and box filter in one pass.
+        rgb = np.empty((*gb.output_shape, 3), dtype=np.float32)
+        _tk.toon_shade(
+            np.ascontiguousarray(gb.normal, dtype=np.float32),
+            np.ascontiguousarray(gb.mask, dtype=np.bool_),
+            lv,
+            np.ascontiguousarray(table, dtype=np.float32),
+            bg,
+            _validate.count(gb.supersample, "gb.supersample", "supersample"),
+            rgb,
+        )
+    else:
+        rgb = _finish(gb, _toon_colour(gb, lv, table, sm, bg))
     if not edges:
         return rgb
     return _edges(

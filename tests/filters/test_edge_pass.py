@@ -246,3 +246,33 @@ def test_profile_and_crease_edges_are_the_separate_calls(captures, kw):
         np.testing.assert_array_equal(inner, E.internal_edges(gb, **kw), name)
         _, crease = E.profile_and_crease_edges(gb, signed=False, **kw)
         np.testing.assert_array_equal(crease, E.crease_edges(gb, **kw), name)
+
+
+def _reference_enhance(shaded, em, inner_c, prof_c):
+    """The array expressions ``enhance`` was written in."""
+    img = np.asarray(shaded, dtype=np.float32)
+    base = np.nan_to_num(img.astype(np.float32), nan=1.0, copy=False)
+    np.clip(base, 0.0, 1.0, out=base)
+    out = np.repeat(base[..., None], 3, axis=2) if base.ndim == 2 else base
+    inner = np.clip(np.nan_to_num(em[..., :1], nan=0.0), 0.0, 1.0)
+    alpha = np.clip(np.nan_to_num(em[..., 3:], nan=0.0), 0.0, 1.0)
+    out += (np.asarray(inner_c, np.float32) - out) * inner
+    out += (np.asarray(prof_c, np.float32) - out) * alpha
+    return out
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(1, 20), st.integers(1, 20), st.integers(0, 2**32 - 1), st.booleans())
+def test_enhance_kernel_equals_the_array_expressions(h, w, seed, grey):
+    rng = np.random.default_rng(seed)
+    shaded = rng.uniform(-0.5, 1.5, (h, w) if grey else (h, w, 3)).astype(np.float32)
+    em = rng.uniform(-0.5, 1.5, (h, w, 4)).astype(np.float32)
+    for a in (shaded, em):
+        flat = a.reshape(-1)
+        flat[rng.random(flat.size) < 0.1] = np.nan
+        flat[rng.random(flat.size) < 0.05] = np.inf
+        flat[rng.random(flat.size) < 0.05] = -np.inf
+    inner_c, prof_c = rng.random(3), rng.random(3)
+    np.testing.assert_array_equal(
+        E.enhance(shaded, em, inner_c, prof_c), _reference_enhance(shaded, em, inner_c, prof_c)
+    )

@@ -1,0 +1,107 @@
+"""Numba kernels of :mod:`.tone`: the shade of ``N.L`` per buffer pixel, box-filtered to the
+output size in the same pass (no buffer-size colour image in between)."""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+__all__ = ["gooch_shade", "toon_shade"]
+
+
+@njit(inline="always", cache=True)
+def _finite(v):
+    """``np.nan_to_num(v, nan=0.0)`` of a float32."""
+    big = np.float32(3.4028235e38)
+    if np.isnan(v):
+        return np.float32(0.0)
+    return min(max(v, -big), big)
+
+
+@njit(inline="always", cache=True)
+def _n_dot_l(normal, mask, r, c, lx, ly, lz):
+    """``N.L`` in float32 clipped to [-1, 1]; 0 off the surface, non-finite components as
+    ``np.nan_to_num`` makes them on it (as ``tone._n_dot_l``)."""
+    nx, ny, nz = normal[r, c, 0], normal[r, c, 1], normal[r, c, 2]
+    d = nx * lx + ny * ly + nz * lz
+    if np.isnan(d):
+        if not mask[r, c]:
+            return np.float32(0.0)
+        nx, ny, nz = _finite(nx), _finite(ny), _finite(nz)
+        d = nx * lx + ny * ly + nz * lz
+    return min(max(d, np.float32(-1.0)), np.float32(1.0))
+
+
+@njit(parallel=True, cache=True)
+def gooch_shade(normal, mask, light, k_warm, k_cool, bg, clip, k, out):
+    """``out`` (h, w, 3): the ``k x k`` block means of ``clip(t k_warm + (1 - t) k_cool)``,
+    ``t = (1 + N.L) / 2``, paper ``bg`` off the mask, clipped to [0, 1] (``tone.gooch``)."""
+    oh, ow = out.shape[0], out.shape[1]
+    lx, ly, lz = light[0], light[1], light[2]
+    half = np.float32(0.5)
+    one = np.float32(1.0)
+    for r in prange(oh):
+        r = np.int64(r)
+        for col in range(ow):
+            t0 = 0.0
+            t1 = 0.0
+            t2 = 0.0
+            for i in range(r * k, r * k + k):
+                for j in range(col * k, col * k + k):
+                    if not mask[i, j]:
+                        t0 += bg[0]
+                        t1 += bg[1]
+                        t2 += bg[2]
+                        continue
+                    t = (_n_dot_l(normal, mask, i, j, lx, ly, lz) + one) * half
+                    u = one - t
+                    for ch in range(3):
+                        v = t * k_warm[ch] + u * k_cool[ch]
+                        if clip:
+                            v = min(max(v, np.float32(0.0)), one)
+                        if ch == 0:
+                            t0 += v
+                        elif ch == 1:
+                            t1 += v
+                        else:
+                            t2 += v
+            n = k * k
+            for ch in range(3):
+                tot = t0 if ch == 0 else (t1 if ch == 1 else t2)
+                v = np.float32(tot / n)
+                out[r, col, ch] = min(max(v, np.float32(0.0)), one)
+
+
+@njit(parallel=True, cache=True)
+def toon_shade(normal, mask, light, table, bg, k, out):
+    """``out`` (h, w, 3): the ``k x k`` block means of the toon texel of ``max(N.L, 0)`` (the
+    ``n`` texels of ``table``, paper ``bg`` off the mask), clipped to [0, 1] (``tone.toon``
+    without smoothing)."""
+    oh, ow = out.shape[0], out.shape[1]
+    lx, ly, lz = light[0], light[1], light[2]
+    n_tex = table.shape[0]
+    fn = np.float32(n_tex)
+    one = np.float32(1.0)
+    for r in prange(oh):
+        r = np.int64(r)
+        for col in range(ow):
+            t0 = 0.0
+            t1 = 0.0
+            t2 = 0.0
+            for i in range(r * k, r * k + k):
+                for j in range(col * k, col * k + k):
+                    if not mask[i, j]:
+                        t0 += bg[0]
+                        t1 += bg[1]
+                        t2 += bg[2]
+                        continue
+                    s = max(_n_dot_l(normal, mask, i, j, lx, ly, lz), np.float32(0.0))
+                    idx = min(np.int64(s * fn), n_tex - 1)
+                    t0 += table[idx, 0]
+                    t1 += table[idx, 1]
+                    t2 += table[idx, 2]
+            n = k * k
+            for ch in range(3):
+                tot = t0 if ch == 0 else (t1 if ch == 1 else t2)
+                v = np.float32(tot / n)
+                out[r, col, ch] = min(max(v, np.float32(0.0)), one)

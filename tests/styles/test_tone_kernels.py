@@ -1,0 +1,77 @@
+"""The one-pass gooch and toon shades against the array expressions they replaced, bit for bit."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import pyvista as pv
+
+import sciviz_gbuf as sg
+from sciviz_gbuf.styles import gooch, tone, toon
+from sciviz_gbuf.styles.tone import GOOCH_BASE, GOOCH_COOL, GOOCH_WARM
+
+
+def _reference_gooch(gb, light, k_warm, k_cool, bg):
+    """Plane by plane at buffer size, then the box filter (the code the kernel replaced)."""
+    t = tone._n_dot_l(gb, light)
+    t += np.float32(1.0)
+    t *= np.float32(0.5)
+    one_minus_t = np.float32(1.0) - t
+    paper = ~np.asarray(gb.mask, dtype=bool)
+    clip = max(float(k_warm.max()), float(k_cool.max())) > 1.0 - 2.0**-20
+    ss = gb.supersample > 1
+    out = np.empty((*(gb.output_shape if ss else gb.shape), 3), dtype=np.float32)
+    for c in range(3):
+        plane = t * k_warm[c] + one_minus_t * k_cool[c]
+        if clip:
+            np.clip(plane, 0.0, 1.0, out=plane)
+        np.copyto(plane, bg[c], where=paper)
+        out[..., c] = gb.downsample(plane) if ss else plane
+    return np.clip(out, 0.0, 1.0, out=out)
+
+
+@pytest.fixture(scope="module")
+def buffers():
+    out = []
+    torus = pv.ParametricTorus()
+    for ss in (1, 2, 3):
+        gb = sg.capture(torus, window_size=(90, 70), supersample=ss)
+        out.append(gb)
+    odd = sg.capture(pv.Sphere(), window_size=(60, 50), supersample=2)
+    n = odd.normal.copy()
+    n[odd.mask][::7, 0] = np.nan  # surface normals with a missing component
+    rows, cols = np.nonzero(odd.mask)
+    n[rows[::5], cols[::5], 1] = np.nan
+    n[rows[::11], cols[::11], 2] = np.inf
+    odd.normal = n
+    out.append(odd)
+    return out
+
+
+@pytest.mark.parametrize("light", [(0.3, 0.5, 1.0), (-1.0, 0.2, 0.1)])
+def test_gooch_shade_equals_plane_by_plane(buffers, light):
+    lv = tone._unit_light(light)
+    f = np.float32
+    base = np.asarray(GOOCH_BASE, f)
+    k_cool = np.asarray(GOOCH_COOL, f) + f(0.2) * base
+    k_warm = np.asarray(GOOCH_WARM, f) + f(0.6) * base
+    for gb in buffers:
+        ref = _reference_gooch(gb, lv, k_warm, k_cool, np.ones(3, f))
+        np.testing.assert_array_equal(gooch(gb, light=light, edges=False), ref)
+    # tones that reach 1: the clipped blend
+    gb = buffers[1]
+    warm = np.asarray((1.0, 1.0, 0.9), f)
+    ref = _reference_gooch(gb, lv, warm + f(0.6) * base, k_cool, np.ones(3, f))
+    got = gooch(gb, light=light, warm=(1.0, 1.0, 0.9), edges=False)
+    np.testing.assert_array_equal(got, ref)
+
+
+@pytest.mark.parametrize("levels", [1, 3, 7, [0.2, 0.5, 0.9, 1.0]])
+def test_toon_shade_equals_the_texel_gather(buffers, levels):
+    base = tone._validate.rgb(tone.TOON_BASE, "base")
+    table = tone._shade_table(levels, base)
+    lv = tone._unit_light(tone.LIGHT)
+    bg = np.ones(3, np.float32)
+    for gb in buffers:
+        ref = tone._finish(gb, tone._toon_colour(gb, lv, table, 0.0, bg))
+        np.testing.assert_array_equal(toon(gb, levels=levels, edges=False), ref)
