@@ -1395,12 +1395,35 @@ def clean_lines(profile, crease, mask, length, ids):
     return dropped
 
 
+@njit(inline="always", cache=True)
+def _dilated(ink, i, j, dr, dc, sign):
+    """The grey dilation of ``sign * ink`` (its positive part if ``sign`` is not 0) at (i, j):
+    the maximum over the footprint offsets, 0 outside the image, NaN if any sample is NaN (as
+    ``np.maximum`` propagates it)."""
+    h, w = ink.shape
+    m = np.float32(-np.inf)
+    for q in range(dr.size):
+        a, b = i + dr[q], j + dc[q]
+        v = np.float32(0.0)
+        if 0 <= a < h and 0 <= b < w:
+            v = ink[a, b]
+            if sign != 0:
+                v = max(sign * v, np.float32(0.0)) if v == v else v
+        if v != v:
+            return v
+        m = max(m, v)
+    return m
+
+
 @njit(parallel=True, cache=True)
-def finish_lines(ink, k, signed, out):
+def finish_lines(ink, k, signed, dr, dc, out):
     """``out`` (h, w): the ``k x k`` block means of ``ink`` clipped to [0, 1], NaN samples left
     out (``GBuffer.downsample``); with ``signed``, the clipped mean of the positive part
-    minus that of the negative part (as ``edges._finish_signed`` takes them)."""
+    minus that of the negative part (as ``edges._finish_signed`` takes them). Each sample is
+    first dilated over the footprint offsets ``(dr, dc)`` (one offset (0, 0): none), the
+    positive and negative parts apart: dilation and downsample in one pass."""
     oh, ow = out.shape
+    plain = dr.size == 1 and dr[0] == 0 and dc[0] == 0
     for r in prange(oh):
         r = np.int64(r)
         tp = np.empty(ow, dtype=np.float64)
@@ -1414,27 +1437,45 @@ def finish_lines(ink, k, signed, out):
             row = ink[i]
             for q in range(k):
                 for j in range(ow):
-                    v = row[j * k + q]
-                    ok = v == v
-                    cnt[j] += 1 if ok else 0
-                    if signed:
-                        tp[j] += np.float64(max(v, np.float32(0.0))) if ok else 0.0
-                        tn[j] += np.float64(max(-v, np.float32(0.0))) if ok else 0.0
+                    if plain:
+                        v = row[j * k + q]
+                        ok = v == v
+                        cnt[j] += 1 if ok else 0
+                        if signed:
+                            tp[j] += np.float64(max(v, np.float32(0.0))) if ok else 0.0
+                            tn[j] += np.float64(max(-v, np.float32(0.0))) if ok else 0.0
+                        else:
+                            tp[j] += np.float64(v) if ok else 0.0
+                    elif signed:
+                        # the two parts are dilated (and their NaN skipped) apart
+                        vp = _dilated(ink, i, j * k + q, dr, dc, np.float32(1.0))
+                        vn = _dilated(ink, i, j * k + q, dr, dc, np.float32(-1.0))
+                        if vp == vp:
+                            tp[j] += np.float64(vp)
+                            cnt[j] += 1
+                        if vn == vn:
+                            tn[j] += np.float64(vn)
+                            cnt[j] += 1 << 32
                     else:
-                        tp[j] += np.float64(v) if ok else 0.0
+                        v = _dilated(ink, i, j * k + q, dr, dc, np.float32(0.0))
+                        if v == v:
+                            tp[j] += np.float64(v)
+                            cnt[j] += 1
         for col in range(ow):
             n = cnt[col]
-            if n == 0:
-                out[r, col] = np.float32(np.nan)
-                continue
-            p = np.float32(tp[col] / n)
-            p = min(max(p, np.float32(0.0)), np.float32(1.0))
+            n_p = n & 0xFFFFFFFF if (signed and not plain) else n
+            n_n = n >> 32 if (signed and not plain) else n
             if signed:
-                q = np.float32(tn[col] / n)
-                q = min(max(q, np.float32(0.0)), np.float32(1.0))
+                p = np.float32(tp[col] / n_p) if n_p > 0 else np.float32(np.nan)
+                q = np.float32(tn[col] / n_n) if n_n > 0 else np.float32(np.nan)
+                p = min(max(p, np.float32(0.0)), np.float32(1.0)) if p == p else p
+                q = min(max(q, np.float32(0.0)), np.float32(1.0)) if q == q else q
                 out[r, col] = p - q
+            elif n == 0:
+                out[r, col] = np.float32(np.nan)
             else:
-                out[r, col] = p
+                p = np.float32(tp[col] / n)
+                out[r, col] = min(max(p, np.float32(0.0)), np.float32(1.0))
 
 
 @njit(parallel=True, cache=True)

@@ -208,31 +208,48 @@ def _dilate(ink: np.ndarray, size: int) -> np.ndarray:
     return out
 
 
+# Widest line dilated sample by sample within the finishing pass; wider ones (a footprint of
+# more than ~50 samples per sample) are dilated first by the run-wise maxima of _dilate.
+_FUSED_DILATION = 8
+_NO_OFFSETS = (np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64))
+
+
+def _offsets(size: int) -> tuple[np.ndarray, np.ndarray]:
+    """Row / column offsets of the :func:`_disk` footprint as ``grey_dilation`` centres it."""
+    lo = (size - 1) // 2
+    rows, cols = np.nonzero(_disk(size))
+    return (rows - lo).astype(np.int64), (cols - lo).astype(np.int64)
+
+
+def _finish_into(gb: GBuffer, ink: np.ndarray, size: int, signed: bool) -> np.ndarray:
+    """One line image dilated to ``size`` buffer pixels, box-filtered and clipped."""
+    k = _validate.count(gb.supersample, "gb.supersample", "supersample")
+    out = np.empty(gb.output_shape, dtype=np.float32)
+    ink = np.ascontiguousarray(ink, dtype=np.float32)
+    if size <= 1:
+        offsets = _NO_OFFSETS
+    elif size <= _FUSED_DILATION:
+        offsets = _offsets(size)
+    else:
+        if signed:
+            pos = _finish_into(gb, _dilate(np.maximum(ink, 0.0), size), 1, False)
+            neg = _finish_into(gb, _dilate(np.maximum(-ink, 0.0), size), 1, False)
+            return (pos - neg).astype(np.float32, copy=False)
+        ink, offsets = _dilate(ink, size), _NO_OFFSETS
+    _k.finish_lines(ink, k, signed, *offsets, out)
+    return out
+
+
 def _finish(gb: GBuffer, *inks: np.ndarray, width: float) -> list[np.ndarray]:
     """Dilate one-pixel line images to ``width`` output pixels and reduce them to output size
-    (box filter and clip to [0, 1] in one pass, :func:`._edge_kernels.finish_lines`)."""
+    (dilation, box filter and clip to [0, 1] in one pass, :func:`._edge_kernels.finish_lines`)."""
     size = max(1, round(width * gb.supersample))
-    k = _validate.count(gb.supersample, "gb.supersample", "supersample")
-    res = []
-    for ink in inks:
-        if size > 1:
-            ink = _dilate(ink, size)
-        out = np.empty(gb.output_shape, dtype=np.float32)
-        _k.finish_lines(np.ascontiguousarray(ink, dtype=np.float32), k, False, out)
-        res.append(out)
-    return res
+    return [_finish_into(gb, ink, size, False) for ink in inks]
 
 
 def _finish_signed(gb: GBuffer, signed: np.ndarray, width: float) -> np.ndarray:
-    """:func:`_finish` of the positive and the negative part, the second subtracted; one pass
-    where no dilation is needed."""
-    if max(1, round(width * gb.supersample)) > 1:
-        pos, neg = _finish(gb, np.maximum(signed, 0.0), np.maximum(-signed, 0.0), width=width)
-        return (pos - neg).astype(np.float32, copy=False)
-    k = _validate.count(gb.supersample, "gb.supersample", "supersample")
-    out = np.empty(gb.output_shape, dtype=np.float32)
-    _k.finish_lines(np.ascontiguousarray(signed, dtype=np.float32), k, True, out)
-    return out
+    """:func:`_finish` of the positive and the negative part, the second subtracted."""
+    return _finish_into(gb, signed, max(1, round(width * gb.supersample)), True)
 
 
 def profile_edges(
