@@ -22,6 +22,7 @@ __all__ = [
     "MODE_DIAGONAL",
     "MODE_PAIRS",
     "clean_lines",
+    "dilate_kernel",
     "edge_map_finish",
     "edge_map_kernel",
     "edge_pass",
@@ -1395,35 +1396,12 @@ def clean_lines(profile, crease, mask, length, ids):
     return dropped
 
 
-@njit(inline="always", cache=True)
-def _dilated(ink, i, j, dr, dc, sign):
-    """The grey dilation of ``sign * ink`` (its positive part if ``sign`` is not 0) at (i, j):
-    the maximum over the footprint offsets, 0 outside the image, NaN if any sample is NaN (as
-    ``np.maximum`` propagates it)."""
-    h, w = ink.shape
-    m = np.float32(-np.inf)
-    for q in range(dr.size):
-        a, b = i + dr[q], j + dc[q]
-        v = np.float32(0.0)
-        if 0 <= a < h and 0 <= b < w:
-            v = ink[a, b]
-            if sign != 0:
-                v = max(sign * v, np.float32(0.0)) if v == v else v
-        if v != v:
-            return v
-        m = max(m, v)
-    return m
-
-
 @njit(parallel=True, cache=True)
-def finish_lines(ink, k, signed, dr, dc, out):
+def finish_lines(ink, k, signed, out):
     """``out`` (h, w): the ``k x k`` block means of ``ink`` clipped to [0, 1], NaN samples left
     out (``GBuffer.downsample``); with ``signed``, the clipped mean of the positive part
-    minus that of the negative part (as ``edges._finish_signed`` takes them). Each sample is
-    first dilated over the footprint offsets ``(dr, dc)`` (one offset (0, 0): none), the
-    positive and negative parts apart: dilation and downsample in one pass."""
+    minus that of the negative part (as ``edges._finish_signed`` takes them)."""
     oh, ow = out.shape
-    plain = dr.size == 1 and dr[0] == 0 and dc[0] == 0
     for r in prange(oh):
         r = np.int64(r)
         tp = np.empty(ow, dtype=np.float64)
@@ -1437,45 +1415,27 @@ def finish_lines(ink, k, signed, dr, dc, out):
             row = ink[i]
             for q in range(k):
                 for j in range(ow):
-                    if plain:
-                        v = row[j * k + q]
-                        ok = v == v
-                        cnt[j] += 1 if ok else 0
-                        if signed:
-                            tp[j] += np.float64(max(v, np.float32(0.0))) if ok else 0.0
-                            tn[j] += np.float64(max(-v, np.float32(0.0))) if ok else 0.0
-                        else:
-                            tp[j] += np.float64(v) if ok else 0.0
-                    elif signed:
-                        # the two parts are dilated (and their NaN skipped) apart
-                        vp = _dilated(ink, i, j * k + q, dr, dc, np.float32(1.0))
-                        vn = _dilated(ink, i, j * k + q, dr, dc, np.float32(-1.0))
-                        if vp == vp:
-                            tp[j] += np.float64(vp)
-                            cnt[j] += 1
-                        if vn == vn:
-                            tn[j] += np.float64(vn)
-                            cnt[j] += 1 << 32
+                    v = row[j * k + q]
+                    ok = v == v
+                    cnt[j] += 1 if ok else 0
+                    if signed:
+                        tp[j] += np.float64(max(v, np.float32(0.0))) if ok else 0.0
+                        tn[j] += np.float64(max(-v, np.float32(0.0))) if ok else 0.0
                     else:
-                        v = _dilated(ink, i, j * k + q, dr, dc, np.float32(0.0))
-                        if v == v:
-                            tp[j] += np.float64(v)
-                            cnt[j] += 1
+                        tp[j] += np.float64(v) if ok else 0.0
         for col in range(ow):
             n = cnt[col]
-            n_p = n & 0xFFFFFFFF if (signed and not plain) else n
-            n_n = n >> 32 if (signed and not plain) else n
-            if signed:
-                p = np.float32(tp[col] / n_p) if n_p > 0 else np.float32(np.nan)
-                q = np.float32(tn[col] / n_n) if n_n > 0 else np.float32(np.nan)
-                p = min(max(p, np.float32(0.0)), np.float32(1.0)) if p == p else p
-                q = min(max(q, np.float32(0.0)), np.float32(1.0)) if q == q else q
-                out[r, col] = p - q
-            elif n == 0:
+            if n == 0:
                 out[r, col] = np.float32(np.nan)
+                continue
+            p = np.float32(tp[col] / n)
+            p = min(max(p, np.float32(0.0)), np.float32(1.0))
+            if signed:
+                q = np.float32(tn[col] / n)
+                q = min(max(q, np.float32(0.0)), np.float32(1.0))
+                out[r, col] = p - q
             else:
-                p = np.float32(tp[col] / n)
-                out[r, col] = min(max(p, np.float32(0.0)), np.float32(1.0))
+                out[r, col] = p
 
 
 @njit(parallel=True, cache=True)
@@ -1499,3 +1459,32 @@ def enhance_kernel(img, em, inner_c, prof_c, out):
                 v += (inner_c[ch] - v) * i
                 v += (prof_c[ch] - v) * a
                 out[r, c, ch] = v
+
+
+@njit(parallel=True, cache=True)
+def dilate_kernel(ink, sign, lo, runs_a, runs_b, out):
+    """``out``: the grey dilation of ``ink`` (of its part ``max(sign * ink, 0)`` if ``sign`` is
+    not 0) by the footprint whose row ``i`` is the run of columns ``runs_a[i]..runs_b[i]``,
+    centred at ``lo`` as ``scipy.ndimage.grey_dilation`` centres it, 0 outside the image; NaN
+    propagates as in ``np.maximum``."""
+    h, w = ink.shape
+    size = runs_a.size
+    for r in prange(h):
+        r = np.int64(r)
+        for c in range(w):
+            out[r, c] = np.float32(-np.inf)
+        for i in range(size):
+            rr = r + i - lo
+            a, b = runs_a[i] - lo, runs_b[i] - lo
+            for c in range(w):
+                m = out[r, c]
+                for j in range(a, b + 1):
+                    cc = c + j
+                    v = np.float32(0.0)
+                    if 0 <= rr < h and 0 <= cc < w:
+                        v = ink[rr, cc]
+                        if sign != 0 and v == v:
+                            v = max(sign * v, np.float32(0.0))
+                    if v > m or v != v:
+                        m = v
+                out[r, c] = m
