@@ -1461,30 +1461,39 @@ def enhance_kernel(img, em, inner_c, prof_c, out):
                 out[r, c, ch] = v
 
 
+@njit(cache=True, error_model="numpy")
+def _max_row(src, n, out):
+    """``out[c] = np.maximum(out[c], src[c])`` for ``n`` columns (NaN propagates)."""
+    for c in range(n):
+        m = out[c]
+        v = src[c]
+        out[c] = v if (v > m) | (v != v) else m
+
+
 @njit(parallel=True, cache=True)
-def dilate_kernel(ink, sign, lo, runs_a, runs_b, out):
+def dilate_kernel(ink, sign, lo, runs_a, runs_b, pad, out):
     """``out``: the grey dilation of ``ink`` (of its part ``max(sign * ink, 0)`` if ``sign`` is
     not 0) by the footprint whose row ``i`` is the run of columns ``runs_a[i]..runs_b[i]``,
     centred at ``lo`` as ``scipy.ndimage.grey_dilation`` centres it, 0 outside the image; NaN
-    propagates as in ``np.maximum``."""
+    propagates as in ``np.maximum``. The input is copied into ``pad`` ((h + size - 1,
+    w + size - 1), its border 0), so the maxima run over whole rows without a test per pixel."""
     h, w = ink.shape
     size = runs_a.size
     for r in prange(h):
         r = np.int64(r)
+        src = ink[r]
+        dst = pad[r + lo, lo:]
         for c in range(w):
-            out[r, c] = np.float32(-np.inf)
+            v = src[c]
+            if sign != 0:
+                v = max(sign * v, np.float32(0.0)) if v == v else v
+            dst[c] = v
+    for r in prange(h):
+        r = np.int64(r)
+        row = out[r]
+        for c in range(w):
+            row[c] = np.float32(-np.inf)
         for i in range(size):
-            rr = r + i - lo
-            a, b = runs_a[i] - lo, runs_b[i] - lo
-            for c in range(w):
-                m = out[r, c]
-                for j in range(a, b + 1):
-                    cc = c + j
-                    v = np.float32(0.0)
-                    if 0 <= rr < h and 0 <= cc < w:
-                        v = ink[rr, cc]
-                        if sign != 0 and v == v:
-                            v = max(sign * v, np.float32(0.0))
-                    if v > m or v != v:
-                        m = v
-                out[r, c] = m
+            prow = pad[r + i]
+            for j in range(runs_a[i], runs_b[i] + 1):
+                _max_row(prow[j:], w, row)

@@ -177,17 +177,21 @@ def _disk(size: int) -> np.ndarray:
     return (xx * xx + yy * yy) <= (size / 2.0) ** 2
 
 
-def _dilate(ink: np.ndarray, size: int, sign: float = 0.0) -> np.ndarray:
+def _dilate(ink: np.ndarray, size: int, sign: float = 0.0, scratch: str = "") -> np.ndarray:
     """``scipy.ndimage.grey_dilation(ink, footprint=_disk(size), mode="constant", cval=0)``
     (of ``np.maximum(sign * ink, 0)`` if ``sign`` is not 0), in one numba pass: each row of
-    the disk is a run of columns (:func:`._edge_kernels.dilate_kernel`)."""
+    the disk is a run of columns (:func:`._edge_kernels.dilate_kernel`). ``scratch``: the
+    result goes into that per-thread scratch image (valid until this module's next call)."""
     foot = _disk(size)
     runs_a = np.array([np.flatnonzero(row)[0] for row in foot], dtype=np.int64)
     runs_b = np.array([np.flatnonzero(row)[-1] for row in foot], dtype=np.int64)
-    out = np.empty(ink.shape, dtype=np.float32)
+    h, w = ink.shape
+    # the padded copy: border 0 when made, interior rewritten by every call
+    pad = _scratch(f"pad{size}", (h + size - 1, w + size - 1), np.float32, zero=True)
+    out = _scratch(scratch, ink.shape, np.float32) if scratch else np.empty(ink.shape, np.float32)
     _k.dilate_kernel(
         np.ascontiguousarray(ink, dtype=np.float32), np.float32(sign), (size - 1) // 2,
-        runs_a, runs_b, out,
+        runs_a, runs_b, pad, out,
     )  # fmt: skip
     return out
 
@@ -200,7 +204,7 @@ def _finish(gb: GBuffer, *inks: np.ndarray, width: float) -> list[np.ndarray]:
     res = []
     for ink in inks:
         if size > 1:
-            ink = _dilate(ink, size)
+            ink = _dilate(ink, size, scratch="dilated")
         out = np.empty(gb.output_shape, dtype=np.float32)
         _k.finish_lines(np.ascontiguousarray(ink, dtype=np.float32), k, False, out)
         res.append(out)
@@ -213,7 +217,10 @@ def _finish_signed(gb: GBuffer, signed: np.ndarray, width: float) -> np.ndarray:
     size = max(1, round(width * gb.supersample))
     if size > 1:
         pos, neg = _finish(
-            gb, _dilate(signed, size, 1.0), _dilate(signed, size, -1.0), width=1.0 / gb.supersample
+            gb,
+            _dilate(signed, size, 1.0, scratch="dilated+"),
+            _dilate(signed, size, -1.0, scratch="dilated-"),
+            width=1.0 / gb.supersample,
         )
         return (pos - neg).astype(np.float32, copy=False)
     k = _validate.count(gb.supersample, "gb.supersample", "supersample")
@@ -442,7 +449,10 @@ def edge_map(
     # The 2003 lines already straddle the edge (two buffer pixels): dilate by one pixel less.
     size = max(1, round(width * gb.supersample) - 1)
     if size > 1:
-        inner, alpha = _dilate(inner, size), _dilate(alpha, size)
+        inner, alpha = (
+            _dilate(inner, size, scratch="dilated+"),
+            _dilate(alpha, size, scratch="dilated-"),
+        )
     k = _validate.count(gb.supersample, "gb.supersample", "supersample")
     res = np.empty((*gb.output_shape, 4), dtype=np.float32)
     _k.edge_map_finish(inner, alpha, k, res)
