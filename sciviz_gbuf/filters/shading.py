@@ -52,7 +52,12 @@ def lambert(
     ambient = _validate.unit_interval(ambient, "ambient")
     m = _validate.mask(mask, n.shape[:2])
     lv = (lv / np.linalg.norm(lv)).astype(np.float32)
-    shade = np.maximum(n.astype(np.float32, copy=False) @ lv, np.float32(0.0))
+    n = n.astype(np.float32, copy=False)
+    # N.L summed component by component in float32 (as the styles' one-pass kernels sum it)
+    ndl = n[..., 0] * lv[0]
+    ndl += n[..., 1] * lv[1]
+    ndl += n[..., 2] * lv[2]
+    shade = np.maximum(ndl, np.float32(0.0))
     shade = np.float32(ambient) + np.float32(1.0 - ambient) * shade
     if m is not None:
         shade = np.where(m, shade, np.float32(np.nan))

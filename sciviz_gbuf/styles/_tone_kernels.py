@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-__all__ = ["gooch_shade", "toon_shade"]
+__all__ = ["gooch_shade", "lambert_shade", "toon_shade"]
 
 
 @njit(inline="always", cache=True)
@@ -105,3 +105,40 @@ def toon_shade(normal, mask, light, table, bg, k, out):
                 tot = t0 if ch == 0 else (t1 if ch == 1 else t2)
                 v = np.float32(tot / n)
                 out[r, col, ch] = min(max(v, np.float32(0.0)), one)
+
+
+@njit(parallel=True, cache=True)
+def lambert_shade(normal, mask, light, ambient, highlight, k, out):
+    """``out`` (h, w): the ``k x k`` block means of ``highlight * clip(ambient + (1 - ambient)
+    max(N.L, 0))`` on the surface and 1 (paper) off it, NaN normals left out, clipped to
+    [0, 1] (``illustration.shade_image``, with ``filters.lambert``'s arithmetic)."""
+    oh, ow = out.shape
+    lx, ly, lz = light[0], light[1], light[2]
+    one = np.float32(1.0)
+    zero = np.float32(0.0)
+    rest = np.float32(1.0 - ambient)
+    amb = np.float32(ambient)
+    hi = np.float32(highlight)
+    for r in prange(oh):
+        r = np.int64(r)
+        for col in range(ow):
+            tot = 0.0
+            n = 0
+            for i in range(r * k, r * k + k):
+                for j in range(col * k, col * k + k):
+                    if not mask[i, j]:
+                        tot += 1.0
+                        n += 1
+                        continue
+                    d = normal[i, j, 0] * lx + normal[i, j, 1] * ly + normal[i, j, 2] * lz
+                    if np.isnan(d):
+                        continue
+                    s = amb + rest * max(d, zero)
+                    s = min(max(s, zero), one)
+                    tot += hi * s
+                    n += 1
+            if n == 0:
+                out[r, col] = np.float32(np.nan)
+            else:
+                v = np.float32(tot / n)
+                out[r, col] = min(max(v, zero), one)

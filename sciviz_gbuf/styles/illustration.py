@@ -16,6 +16,7 @@ from ..core.gbuffer import GBuffer, check_gbuffer
 from ..errors import InputError
 from ..filters import edge_map, enhance, lambert, profile_and_crease_edges, profile_edges
 from ..filters.edges import INNER_COLOR
+from . import _tone_kernels as _tk
 from ._ink import clump_cut
 from .registry import check_style, register, styles_for
 
@@ -68,9 +69,20 @@ def shade_image(
     gb = check_gbuffer(gb)
     if not 0.0 < _validate.finite(highlight, "highlight") <= 1.0:
         raise InputError(f"highlight: expected a value in (0, 1], got {_validate.brief(highlight)}")
-    shade = lambert(gb.normal, light=light, ambient=ambient)
-    shade = np.where(gb.mask, np.float32(highlight) * shade, np.float32(1.0))
-    return np.clip(gb.downsample(shade), 0.0, 1.0).astype(np.float32, copy=False)
+    lambert(gb.normal[:1, :1], light=light, ambient=ambient)  # the checks (and their errors)
+    lv = np.asarray(light, dtype=np.float64).reshape(-1)
+    out = np.empty(gb.output_shape, dtype=np.float32)
+    # lambert, the paper and the box filter per output pixel in one pass (same arithmetic)
+    _tk.lambert_shade(
+        np.ascontiguousarray(gb.normal, dtype=np.float32),
+        np.ascontiguousarray(gb.mask, dtype=np.bool_),
+        (lv / np.linalg.norm(lv)).astype(np.float32),
+        float(_validate.unit_interval(ambient, "ambient")),
+        float(highlight),
+        _validate.count(gb.supersample, "gb.supersample", "supersample"),
+        out,
+    )
+    return out
 
 
 def signed_to_grey(values: np.ndarray, *, scale: float = 1.0) -> np.ndarray:

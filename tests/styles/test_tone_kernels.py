@@ -7,7 +7,9 @@ import pytest
 import pyvista as pv
 
 import sciviz_gbuf as sg
+from sciviz_gbuf.filters import lambert
 from sciviz_gbuf.styles import gooch, tone, toon
+from sciviz_gbuf.styles.illustration import shade_image
 from sciviz_gbuf.styles.tone import GOOCH_BASE, GOOCH_COOL, GOOCH_WARM
 
 
@@ -75,3 +77,14 @@ def test_toon_shade_equals_the_texel_gather(buffers, levels):
     for gb in buffers:
         ref = tone._finish(gb, tone._toon_colour(gb, lv, table, 0.0, bg))
         np.testing.assert_array_equal(toon(gb, levels=levels, edges=False), ref)
+
+
+@pytest.mark.parametrize("light", [(-0.4, 0.5, 0.77), (0.0, 0.0, 1.0)])
+@pytest.mark.parametrize("ambient", [0.0, 0.2])
+def test_shade_image_equals_lambert_then_downsample(buffers, light, ambient):
+    for gb in buffers:
+        shade = lambert(gb.normal, light=light, ambient=ambient)
+        shade = np.where(gb.mask, np.float32(0.85) * shade, np.float32(1.0))
+        ref = np.clip(gb.downsample(shade), 0.0, 1.0).astype(np.float32)
+        got = shade_image(gb, light=light, ambient=ambient, highlight=0.85)
+        np.testing.assert_array_equal(got, ref)
