@@ -66,6 +66,7 @@ def main() -> None:
     t_cap = best(lambda: sg.capture(nut, window_size=(w, h), camera=cam, supersample=k), 1)
     gb = sg.capture(nut, window_size=(w, h), camera=cam, supersample=k)
     sections = with_section_uv(gb)
+
     # Every style of the registry that draws from a kept G-buffer, at its defaults (the
     # issue's goal: each <= 0.5x the re-render), then variants and the parts alone.
     def drawn(draw, buffers):
