@@ -44,6 +44,7 @@ from .. import _validate
 from ..core.gbuffer import GBuffer, check_gbuffer
 from ..errors import InputError
 from ..filters import lambert
+from . import _hatch_kernels as _hk
 from .illustration import LIGHT, PAPER, profile_ink
 from .registry import register
 
@@ -329,6 +330,56 @@ def hatch(
     mask = np.asarray(gb.mask, dtype=bool)
     tone = _tone(gb.normal, light, mask)
     h, w = gb.shape
+    if space == "screen":
+        # Every family per pixel in one pass (the arithmetic of _array_strokes, value for value).
+        tau, left, _ = family_thresholds(theta.size, m_ink)
+        strokes = np.empty((h, w), dtype=np.float32)
+        _hk.screen_strokes(
+            tone, theta.astype(np.float64), float(sp), -1.0 if cap_w is None else float(cap_w),
+            tau, left, float(m_ink), strokes,
+        )  # fmt: skip
+    else:
+        strokes = _array_strokes(gb, tone, space, theta, sp, m_ink, cap_w, scale, k)
+    amount = strokes if k == 1 else gb.downsample(strokes)
+    np.clip(amount, 0.0, 1.0, out=amount)
+    keep = None
+    if edges:
+        # profiles are black whatever the ink colour (2003 edge enhancement: A channel), set
+        # off from the strokes by paper so that they stay visible over dark tones; where they
+        # crowd into a clump (a small hole), only its skeleton, so they never fill an area
+        prof = profile_ink(gb, width=pw)
+        halo = profile_halo(prof)
+        # inside the object only: at the antialiased outline the strokes keep it dark
+        halo[gb.downsample(mask.astype(np.float32)) < np.float32(1.0)] = np.float32(0.0)
+        amount *= np.float32(1.0) - halo
+        keep = np.float32(1.0) - prof
+    rgb = np.empty((*amount.shape, 3), dtype=np.float32)
+    plane = np.empty_like(amount)
+    for c in range(3):  # contiguous planes: an innermost axis of 3 makes numpy slow
+        np.multiply(amount, ink_c[c] - paper_c[c], out=plane)
+        plane += paper_c[c]
+        if keep is not None:
+            plane *= keep
+        rgb[..., c] = plane
+    return np.clip(rgb, 0.0, 1.0, out=rgb)
+
+
+def _array_strokes(
+    gb: GBuffer,
+    tone: np.ndarray,
+    space: str,
+    theta: np.ndarray,
+    sp: float,
+    m_ink: float,
+    cap_w: float | None,
+    scale: float | None,
+    k: int,
+) -> np.ndarray:
+    """The stroke ink of :func:`hatch` at buffer size, family by family over flat arrays of
+    the pixels each family inks (the uv strokes; in screen space the reference that
+    :func:`._hatch_kernels.screen_strokes` is tested against)."""
+    mask = np.asarray(gb.mask, dtype=bool)
+    h, w = gb.shape
     # Only pixels with some tone can take ink (family f inks where tone > f / N): the strokes
     # are evaluated on those alone, as flat arrays, and the families on shrinking subsets.
     at = np.flatnonzero(tone.reshape(-1) > 0)
@@ -386,29 +437,7 @@ def hatch(
         paper_left[:m] *= np.float32(1.0) - stroke_ink(distance, width)
     strokes = np.zeros(h * w, dtype=np.float32)
     strokes[at] = np.float32(1.0) - paper_left
-    strokes = strokes.reshape(h, w)
-    amount = strokes if k == 1 else gb.downsample(strokes)
-    np.clip(amount, 0.0, 1.0, out=amount)
-    keep = None
-    if edges:
-        # profiles are black whatever the ink colour (2003 edge enhancement: A channel), set
-        # off from the strokes by paper so that they stay visible over dark tones; where they
-        # crowd into a clump (a small hole), only its skeleton, so they never fill an area
-        prof = profile_ink(gb, width=pw)
-        halo = profile_halo(prof)
-        # inside the object only: at the antialiased outline the strokes keep it dark
-        halo[gb.downsample(mask.astype(np.float32)) < np.float32(1.0)] = np.float32(0.0)
-        amount *= np.float32(1.0) - halo
-        keep = np.float32(1.0) - prof
-    rgb = np.empty((*amount.shape, 3), dtype=np.float32)
-    plane = np.empty_like(amount)
-    for c in range(3):  # contiguous planes: an innermost axis of 3 makes numpy slow
-        np.multiply(amount, ink_c[c] - paper_c[c], out=plane)
-        plane += paper_c[c]
-        if keep is not None:
-            plane *= keep
-        rgb[..., c] = plane
-    return np.clip(rgb, 0.0, 1.0, out=rgb)
+    return strokes.reshape(h, w)
 
 
 register(

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import importlib
+
 import numpy as np
 import pytest
 import pyvista as pv
@@ -11,6 +13,9 @@ from sciviz_gbuf.filters import lambert
 from sciviz_gbuf.styles import gooch, tone, toon
 from sciviz_gbuf.styles.illustration import shade_image
 from sciviz_gbuf.styles.tone import GOOCH_BASE, GOOCH_COOL, GOOCH_WARM
+
+# the module (``sciviz_gbuf.styles.hatch`` is also the style function the package exports)
+H = importlib.import_module("sciviz_gbuf.styles.hatch")
 
 
 def _reference_gooch(gb, light, k_warm, k_cool, bg):
@@ -87,4 +92,23 @@ def test_shade_image_equals_lambert_then_downsample(buffers, light, ambient):
         shade = np.where(gb.mask, np.float32(0.85) * shade, np.float32(1.0))
         ref = np.clip(gb.downsample(shade), 0.0, 1.0).astype(np.float32)
         got = shade_image(gb, light=light, ambient=ambient, highlight=0.85)
+        np.testing.assert_array_equal(got, ref)
+
+
+@pytest.mark.parametrize("kw", [{}, {"spacing": 3.0, "angles": (10.0, 75.0, 140.0)},
+                                {"max_width": 1.5, "max_ink": 0.9}])  # fmt: skip
+def test_screen_strokes_equal_the_family_by_family_arrays(buffers, kw):
+    for gb in buffers:
+        k = gb.supersample
+        sp = float(kw.get("spacing", H.HATCH_SPACING)) * k
+        theta = H._angles(kw.get("angles", H.HATCH_ANGLES))
+        m_ink = float(kw.get("max_ink", H.HATCH_MAX_INK))
+        cap = kw.get("max_width")
+        cap_w = None if cap is None else float(cap) * k
+        t = H._tone(gb.normal, tone.LIGHT, np.asarray(gb.mask, dtype=bool))
+        ref = H._array_strokes(gb, t, "screen", theta, sp, m_ink, cap_w, None, k)
+        tau, left, _ = H.family_thresholds(theta.size, m_ink)
+        got = np.empty_like(ref)
+        H._hk.screen_strokes(t, theta.astype(np.float64), sp, -1.0 if cap_w is None else cap_w,
+                             tau, left, m_ink, got)  # fmt: skip
         np.testing.assert_array_equal(got, ref)
