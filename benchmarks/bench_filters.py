@@ -41,7 +41,7 @@ The ``core`` column separates that cost. For the operators it is the same public
 the ``np.empty`` of ``sciviz_gbuf.filters.operators`` / ``._stencil`` handing out a reused
 buffer (checked to give the same result): no allocation, no page faults, so public vs core is
 what allocating the result costs. For the G-buffer functions it is the private numba kernel
-(``_edge_kernels.pair_edge_kernel`` / ``edge_map_kernel``) alone on preallocated output, without
+(``_edge_kernels.edge_pass``, in its pair or edge-map mode) alone on preallocated output, without
 the dilation, downsample, clip and stack that follow it. ``-`` where that does not apply to the
 code as it is (private internals, not part of the package's interface).
 
@@ -358,15 +358,11 @@ def _gbuf_kernel(gb, which: str):
         args = (*edges._kernel_inputs(gb), parallel, inv_d)
         h, w = gb.shape
         jump, crease = edges.DEFAULT_DEPTH_JUMP, edges.DEFAULT_CREASE_ANGLE
-        if which == "pair":
-            p = np.empty((h, w), dtype=np.float32)
-            c = np.empty((h, w), dtype=np.float32)
-            kern = k.pair_edge_kernel
-            return _probe(lambda: kern(*args, inv_w, jump, crease, 0.5 * crease, True, p, c))
-        out = np.empty((h, w, 4), dtype=np.float32)
-        kern = k.edge_map_kernel
-        use_c1 = which == "c1"
-        return _probe(lambda: kern(*args, jump, crease, 0.5 * crease, use_c1, out))
+        a = np.empty((h, w), dtype=np.float32)
+        b = np.empty((h, w), dtype=np.float32)
+        mode = {"pair": k.MODE_PAIRS, "c1": k.MODE_C1}.get(which, k.MODE_DIAGONAL)
+        kern = k.edge_pass
+        return _probe(lambda: kern(*args, inv_w, jump, crease, 0.5 * crease, True, mode, a, b))
     except (ImportError, AttributeError):
         return None
 
@@ -688,8 +684,8 @@ def main(argv: list[str] | None = None) -> int:
         "  without a mask on the same image in the same run (nut gbuf: on the capture's sz); "
         "core MPix/s = operators: the same call\n"
         "  with its result buffer reused (no allocation / page faults); gbuf: the numba kernel "
-        "alone (pair_edge_kernel /\n"
-        "  edge_map_kernel, without dilation, downsample, clip, stack); other load = CPU share "
+        "alone (edge_pass, pair /\n"
+        "  edge-map mode, without dilation, downsample, clip, stack); other load = CPU share "
         "taken by other processes."
     )
 
