@@ -64,9 +64,10 @@ def main() -> None:
         h, w = gb.shape
         a, b = np.empty((h, w), np.float32), np.empty((h, w), np.float32)
         em = np.empty((h, w, 4), np.float32)
+        none = np.zeros((1, 1), np.float32)
 
         def fused():
-            K.edge_pass(*ins, jump, crease, 0.5 * crease, True, mode, a, b)
+            K.edge_pass(*ins, jump, crease, 0.5 * crease, True, mode, a, b, 0.0, 0.0, none)
 
         def reference():
             K.pair_edge_kernel(*ins, jump, crease, 0.5 * crease, True, a, b)

@@ -889,6 +889,31 @@ def _combine_row(inner, cre, prof, n, out_a, out_b):
         out_b[i] = prof[i]
 
 
+@njit(cache=True)
+def _best_crease(
+    sz, depth, normal, m, r, c, bits, may_h, may_v, h, w, parallel, inv_d, inv_w, jump,
+    crease, soft, cos_min, cos_skip,
+):  # fmt: skip
+    """The signed crease ink of pixel (r, c) in :func:`pair_edge_kernel`: the stronger of its
+    pairs to the right (``bits & 1``) and below (``bits & 2``) that are candidates."""
+    best = 0.0
+    if bits & 1:
+        ink, geo = _pair_crease(
+            sz, depth, normal, m, r, c, 0, 1, h, w, parallel, inv_d, inv_w, jump, crease, soft,
+            cos_min, cos_skip, may_h,
+        )  # fmt: skip
+        if ink > abs(best):
+            best = ink if geo >= 0.0 else -ink
+    if bits & 2:
+        ink, geo = _pair_crease(
+            sz, depth, normal, m, r, c, 1, 0, h, w, parallel, inv_d, inv_w, jump, crease, soft,
+            cos_min, cos_skip, may_v,
+        )  # fmt: skip
+        if ink > abs(best):
+            best = ink if geo >= 0.0 else -ink
+    return best
+
+
 @njit(parallel=True, cache=True)
 def edge_pass(
     sz,
@@ -905,15 +930,27 @@ def edge_pass(
     mode,
     out_a,
     out_b,
+    crease2,
+    soft2,
+    out_c,
 ):
     """Profile and crease ink of :func:`pair_edge_kernel` (``mode`` 0: ``out_a`` = profile,
     ``out_b`` = signed crease), or the one-pixel 2003 edge map of :func:`edge_map_kernel`
     with the depth's creases added to its inner edges (``mode`` 1 diagonal, 2 C1: ``out_a``
     = ``max(inner, |crease|)``, ``out_b`` = profile), in one pass (see the section comment).
+    With ``crease2 > 0`` (mode 0), ``out_c`` gets the signed crease ink at that second angle
+    (``soft2``) too: the same as a second pass at it, for the price of one.
     """
     h, w = sz.shape
     cos_min = math.cos(math.radians(crease))
     cos_skip = cos_min + _COS_MARGIN
+    two = crease2 > 0.0 and mode == MODE_PAIRS
+    cos_min2 = math.cos(math.radians(crease2)) if two else cos_min
+    cos_skip2 = cos_min2 + _COS_MARGIN
+    # The candidate tests at the smaller angle pass every pair the larger one passes; each
+    # candidate is then evaluated exactly at each angle (the same ink as one pass per angle).
+    cos_min_c = max(cos_min, cos_min2)
+    cos_skip_c = cos_min_c + _COS_MARGIN
     lo = np.empty(h, dtype=np.int64)
     hi = np.empty(h, dtype=np.int64)
     _valid_spans(sz, m, lo, hi)
@@ -938,6 +975,11 @@ def edge_pass(
             for c in range(b, w):
                 out_a[r, c] = 0.0
                 out_b[r, c] = 0.0
+            if two:
+                for c in range(a):
+                    out_c[r, c] = 0.0
+                for c in range(b, w):
+                    out_c[r, c] = 0.0
         if a >= b:
             continue
         up_g = np.empty((4, w + 2), dtype=np.float64)
@@ -960,6 +1002,7 @@ def edge_pass(
         ins = np.empty(4, dtype=np.float64)
         cand = np.zeros(w, dtype=np.uint8)
         cre_row = np.empty(w, dtype=np.float64)
+        cre_row2 = np.empty(w, dtype=np.float64)
         inner_row = np.empty(w, dtype=np.float64)
         for r in range(r0 - 2, r0 + 2):
             _ring_fill(
@@ -1038,7 +1081,7 @@ def edge_pass(
                     EY[s_r, o + 2 :],
                     EZ[s_r, o + 2 :],
                     n,
-                    cos_min,
+                    cos_min_c,
                     may_h,
                 )
                 _turn_row(
@@ -1057,7 +1100,7 @@ def edge_pass(
                     EY[s_dn2, o:],
                     EZ[s_dn2, o:],
                     n,
-                    cos_min,
+                    cos_min_c,
                     may_v,
                 )
                 _dot_row(
@@ -1084,72 +1127,34 @@ def edge_pass(
                     dot_v,
                     n,
                     jump,
-                    cos_skip,
+                    cos_skip_c,
                     1 if b == w else 0,
                     1 if r + 1 < h else 0,
                     cand,
                 )
             for i in range(n):
                 cre_row[i] = 0.0
+                cre_row2[i] = 0.0
             if do_crease:
                 for i in range(n):
                     if cand[i] == 0:
                         continue
                     c = a + i
-                    best = 0.0
-                    if cand[i] & 1:
-                        may = may_h[i]
-                        ink, geo = _pair_crease(
-                            sz,
-                            depth,
-                            normal,
-                            m,
-                            r,
-                            c,
-                            0,
-                            1,
-                            h,
-                            w,
-                            parallel,
-                            inv_d,
-                            inv_w,
-                            jump,
-                            crease,
-                            soft,
-                            cos_min,
-                            cos_skip,
-                            may,
-                        )
-                        if ink > abs(best):
-                            best = ink if geo >= 0.0 else -ink
-                    if cand[i] & 2:
-                        may = may_v[i]
-                        ink, geo = _pair_crease(
-                            sz,
-                            depth,
-                            normal,
-                            m,
-                            r,
-                            c,
-                            1,
-                            0,
-                            h,
-                            w,
-                            parallel,
-                            inv_d,
-                            inv_w,
-                            jump,
-                            crease,
-                            soft,
-                            cos_min,
-                            cos_skip,
-                            may,
-                        )
-                        if ink > abs(best):
-                            best = ink if geo >= 0.0 else -ink
-                    cre_row[i] = best if prof[i] < 1.0 else 0.0
+                    if prof[i] >= 1.0:
+                        continue  # a full profile pixel carries no crease ink
+                    cre_row[i] = _best_crease(
+                        sz, depth, normal, m, r, c, cand[i], may_h[i], may_v[i], h, w,
+                        parallel, inv_d, inv_w, jump, crease, soft, cos_min, cos_skip,
+                    )  # fmt: skip
+                    if two:
+                        cre_row2[i] = _best_crease(
+                            sz, depth, normal, m, r, c, cand[i], may_h[i], may_v[i], h, w,
+                            parallel, inv_d, inv_w, jump, crease2, soft2, cos_min2, cos_skip2,
+                        )  # fmt: skip
             if mode == MODE_PAIRS:
                 _store_row(prof, cre_row, n, out_a[r, a:], out_b[r, a:])
+                if two:
+                    _store_row(prof, cre_row2, n, out_a[r, a:], out_c[r, a:])
             else:
                 _edge_map_row(
                     V,

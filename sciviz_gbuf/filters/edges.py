@@ -97,13 +97,24 @@ def _kernel_inputs(gb: GBuffer) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.
     )
 
 
-def _pair_edges(gb: GBuffer, depth_jump: float, crease_angle: float, creases: bool = True):
+_NO_SECOND = np.zeros((1, 1), dtype=np.float32)  # edge_pass's second crease image, unused
+
+
+def _pair_edges(
+    gb: GBuffer,
+    depth_jump: float,
+    crease_angle: float,
+    creases: bool = True,
+    second_angle: float | None = None,
+):
     """One-pixel profile and signed crease images (per-thread scratch: valid until the next
-    call of this module in the same thread)."""
+    call of this module in the same thread); with ``second_angle``, the crease image at that
+    angle too (``profile, crease, crease2``), from the same pass."""
     parallel, inv_d, inv_w = _camera_terms(gb)
     h, w = gb.shape
     profile = _scratch("profile", (h, w), np.float32)
     crease = _scratch("crease", (h, w), np.float32)
+    crease2 = _NO_SECOND if second_angle is None else _scratch("crease2", (h, w), np.float32)
     _k.edge_pass(
         *_kernel_inputs(gb),
         parallel,
@@ -116,8 +127,13 @@ def _pair_edges(gb: GBuffer, depth_jump: float, crease_angle: float, creases: bo
         _k.MODE_PAIRS,
         profile,
         crease,
+        0.0 if second_angle is None else float(second_angle),
+        0.0 if second_angle is None else 0.5 * float(second_angle),
+        crease2,
     )
-    return profile, crease
+    if second_angle is None:
+        return profile, crease
+    return profile, crease, crease2
 
 
 def _clean(
@@ -350,10 +366,20 @@ def profile_and_crease_edges(
     _check_params(depth_jump, crease_angle, width)
     min_length = _check_min_length(min_length)
     signed = _validate.boolean(signed, "signed")
-    if float(crease_angle) != DEFAULT_CREASE_ANGLE or min_length == 0:
-        # profile_edges cleans with the default angle (and skips creases without cleaning)
+    if min_length == 0:
+        # profile_edges skips the creases without cleaning
         prof = profile_edges(gb, depth_jump=depth_jump, width=width, min_length=min_length)
         _, crease = _lines(gb, depth_jump, crease_angle, min_length)
+    elif float(crease_angle) != DEFAULT_CREASE_ANGLE:
+        # One pass for both angles: the profiles are cleaned with the default angle's creases
+        # (as profile_edges cleans them), the creases with their own.
+        profile, default, crease = _pair_edges(
+            gb, depth_jump, DEFAULT_CREASE_ANGLE, second_angle=crease_angle
+        )
+        own = _scratch("profile2", profile.shape, np.float32)
+        np.copyto(own, profile)
+        prof = _finish(gb, _clean(gb, profile, default, min_length)[0], width=width)[0]
+        _, crease = _clean(gb, own, crease, min_length)
     else:
         profile, crease = _lines(gb, depth_jump, crease_angle, min_length)
         prof = _finish(gb, profile, width=width)[0]
@@ -445,6 +471,9 @@ def edge_map(
         _k.MODE_C1 if operator == "c1" else _k.MODE_DIAGONAL,
         inner,
         alpha,
+        0.0,
+        0.0,
+        _NO_SECOND,
     )
     # The 2003 lines already straddle the edge (two buffer pixels): dilate by one pixel less.
     size = max(1, round(width * gb.supersample) - 1)

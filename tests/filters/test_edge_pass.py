@@ -57,7 +57,7 @@ def _fused(sz, depth, normal, m, par, inv_d, inv_w, jump, crease):
         b = np.full((h, w), 7.0, np.float32)
         K.edge_pass(
             sz, depth, normal, m, par, inv_d, inv_w, jump, crease, 0.5 * crease, do_crease,
-            mode, a, b,
+            mode, a, b, 0.0, 0.0, np.zeros((1, 1), np.float32),
         )  # fmt: skip
         out[key] = (a, b)
     return out
@@ -276,3 +276,26 @@ def test_enhance_kernel_equals_the_array_expressions(h, w, seed, grey):
     np.testing.assert_array_equal(
         E.enhance(shaded, em, inner_c, prof_c), _reference_enhance(shaded, em, inner_c, prof_c)
     )
+
+
+@settings(max_examples=100, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(buffers(), st.floats(1.0, 120.0))
+def test_second_crease_angle_equals_a_second_pass(args, crease2):
+    *ins, jump, crease = args
+    h, w = ins[0].shape
+    none = np.zeros((1, 1), np.float32)
+
+    def one(angle):
+        a, b = np.empty((h, w), np.float32), np.empty((h, w), np.float32)
+        K.edge_pass(*ins, jump, angle, 0.5 * angle, True, K.MODE_PAIRS, a, b, 0.0, 0.0, none)
+        return a, b
+
+    a, b, c = (np.full((h, w), 7.0, np.float32) for _ in range(3))
+    K.edge_pass(
+        *ins, jump, crease, 0.5 * crease, True, K.MODE_PAIRS, a, b, crease2, 0.5 * crease2, c
+    )
+    p1, c1 = one(crease)
+    _, c2 = one(crease2)
+    np.testing.assert_array_equal(a, p1)
+    np.testing.assert_array_equal(b, c1)
+    np.testing.assert_array_equal(c, c2)
