@@ -11,17 +11,25 @@ __all__ = ["screen_strokes"]
 
 
 @njit(parallel=True, cache=True)
-def screen_strokes(tone, theta, sp, cap_w, tau, left, max_ink, out):
+def screen_strokes(normal, mask, light, theta, sp, cap_w, tau, left, max_ink, out):
     """``out`` (H, W): the stroke ink ``1 - prod_f (1 - ink_f)`` of the families that ink each
-    pixel with ``tone > 0`` (family ``f >= 1`` where ``tone > tau[f]``), 0 elsewhere.
+    pixel with ``tone > 0`` (family ``f >= 1`` where ``tone > tau[f]``), 0 elsewhere; the tone
+    is ``1 - max(N.L, 0)`` on the surface (``hatch._tone``: ``filters.lambert``'s arithmetic,
+    0 off the surface and where the normal is NaN).
 
     The arithmetic of ``hatch.hatch`` in screen space, value for value: the stroke coordinate
     ``(-x sin a + y cos a) / sp`` in float64 (x right, y up, in pixels), the family coverage
     (``_family_coverage``), the width ``cover sp`` (capped at ``cap_w`` if ``cap_w >= 0``) and
     the antialiased ink (``stroke_ink``) in float32.
     """
-    h, w = tone.shape
+    h, w = mask.shape
     n = theta.size
+    lx, ly, lz = light[0], light[1], light[2]
+    sin_a = np.empty(n, dtype=np.float64)
+    cos_a = np.empty(n, dtype=np.float64)
+    for f in range(n):
+        sin_a[f] = math.sin(theta[f])
+        cos_a[f] = math.cos(theta[f])
     one = np.float32(1.0)
     zero = np.float32(0.0)
     half = np.float32(0.5)
@@ -31,7 +39,11 @@ def screen_strokes(tone, theta, sp, cap_w, tau, left, max_ink, out):
         r = np.int64(r)
         y = np.float64(np.float32(h - 1 - r))
         for c in range(w):
-            t = tone[r, c]
+            t = zero
+            if mask[r, c]:
+                d = normal[r, c, 0] * lx + normal[r, c, 1] * ly + normal[r, c, 2] * lz
+                if d == d:
+                    t = one - min(max(max(d, zero), zero), one)
             if not t > 0:
                 out[r, c] = zero
                 continue
@@ -43,8 +55,7 @@ def screen_strokes(tone, theta, sp, cap_w, tau, left, max_ink, out):
                 top = min(t, tau[f + 1])
                 cover = one - (one - m_ink * top) / left[f]
                 cover = min(max(cover, zero), one)
-                a = theta[f]
-                along = -x * math.sin(a) + y * math.cos(a)
+                along = -x * sin_a[f] + y * cos_a[f]
                 along /= sp
                 d = np.float32((along - np.round(along)) * np.float64(period))
                 width = cover * period

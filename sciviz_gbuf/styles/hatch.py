@@ -328,17 +328,27 @@ def hatch(
         raise InputError("space: 'uv' needs texture coordinates, but gb.uv is None")
 
     mask = np.asarray(gb.mask, dtype=bool)
-    tone = _tone(gb.normal, light, mask)
     h, w = gb.shape
     if space == "screen":
         # Every family per pixel in one pass (the arithmetic of _array_strokes, value for value).
         tau, left, _ = family_thresholds(theta.size, m_ink)
         strokes = np.empty((h, w), dtype=np.float32)
+        lambert(gb.normal[:1, :1], light=light)  # its checks (and their errors)
+        lv = np.asarray(light, dtype=np.float64).reshape(-1)
         _hk.screen_strokes(
-            tone, theta.astype(np.float64), float(sp), -1.0 if cap_w is None else float(cap_w),
-            tau, left, float(m_ink), strokes,
-        )  # fmt: skip
+            np.ascontiguousarray(gb.normal, dtype=np.float32),
+            mask,
+            (lv / np.linalg.norm(lv)).astype(np.float32),
+            theta.astype(np.float64),
+            float(sp),
+            -1.0 if cap_w is None else float(cap_w),
+            tau,
+            left,
+            float(m_ink),
+            strokes,
+        )
     else:
+        tone = _tone(gb.normal, light, mask)
         strokes = _array_strokes(gb, tone, space, theta, sp, m_ink, cap_w, scale, k)
     amount = strokes if k == 1 else gb.downsample(strokes)
     np.clip(amount, 0.0, 1.0, out=amount)

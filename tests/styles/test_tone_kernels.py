@@ -109,6 +109,9 @@ def test_screen_strokes_equal_the_family_by_family_arrays(buffers, kw):
         ref = H._array_strokes(gb, t, "screen", theta, sp, m_ink, cap_w, None, k)
         tau, left, _ = H.family_thresholds(theta.size, m_ink)
         got = np.empty_like(ref)
-        H._hk.screen_strokes(t, theta.astype(np.float64), sp, -1.0 if cap_w is None else cap_w,
-                             tau, left, m_ink, got)  # fmt: skip
+        lv = tone._unit_light(tone.LIGHT)
+        cap_arg = -1.0 if cap_w is None else cap_w
+        H._hk.screen_strokes(
+            gb.normal, gb.mask, lv, theta.astype(np.float64), sp, cap_arg, tau, left, m_ink, got
+        )
         np.testing.assert_array_equal(got, ref)
