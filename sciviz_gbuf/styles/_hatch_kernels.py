@@ -57,7 +57,7 @@ def screen_strokes(normal, mask, light, theta, sp, cap_w, tau, left, max_ink, ou
                 cover = min(max(cover, zero), one)
                 along = -x * sin_a[f] + y * cos_a[f]
                 along /= sp
-                d = np.float32((along - np.round(along)) * np.float64(period))
+                d = np.float32((along - np.rint(along)) * np.float64(period))
                 width = cover * period
                 if cap_w >= 0.0:
                     width = min(width, np.float32(cap_w) * (period / period))
