@@ -159,6 +159,9 @@ def _clean(
 
 
 _SCRATCH = threading.local()
+#: Largest scratch image kept between calls (64 MB: a 4096^2 float32 buffer); larger ones are
+#: made per call. About eight are kept per thread.
+_SCRATCH_MAX_BYTES = 64 << 20
 
 
 def _scratch(name: str, shape: tuple[int, ...], dtype: type, zero: bool = False) -> np.ndarray:
@@ -169,6 +172,9 @@ def _scratch(name: str, shape: tuple[int, ...], dtype: type, zero: bool = False)
     memory back to its host), which costs more than the kernels that fill it. ``zero``: the
     buffer is all 0 when first made and its user leaves it so (:func:`_clean`'s ids).
     """
+    if int(np.prod(shape)) * np.dtype(dtype).itemsize > _SCRATCH_MAX_BYTES:
+        # Not kept: a huge buffer would stay allocated for as long as the thread lives.
+        return np.zeros(shape, dtype=dtype) if zero else np.empty(shape, dtype=dtype)
     pool = getattr(_SCRATCH, "pool", None)
     if pool is None:
         pool = _SCRATCH.pool = {}

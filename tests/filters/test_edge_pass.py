@@ -299,3 +299,14 @@ def test_second_crease_angle_equals_a_second_pass(args, crease2):
     np.testing.assert_array_equal(a, p1)
     np.testing.assert_array_equal(b, c1)
     np.testing.assert_array_equal(c, c2)
+
+
+def test_scratch_images_are_kept_per_thread_up_to_a_bound():
+    a = E._scratch("t", (64, 64), np.float32)
+    assert E._scratch("t", (64, 64), np.float32) is a  # kept
+    assert E._scratch("t", (64, 65), np.float32) is not a  # another shape: replaced
+    side = int((E._SCRATCH_MAX_BYTES // 4) ** 0.5) + 1
+    big = E._scratch("t_big", (side, side), np.float32)
+    assert E._scratch("t_big", (side, side), np.float32) is not big  # too large to keep
+    zeros = E._scratch("t_zero_big", (side, side), np.int32, zero=True)
+    assert not zeros[::97, ::89].any()
