@@ -7,7 +7,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-__all__ = ["screen_strokes"]
+__all__ = ["hatch_compose", "screen_strokes"]
 
 
 @njit(parallel=True, cache=True)
@@ -67,3 +67,59 @@ def screen_strokes(normal, mask, light, theta, sp, cap_w, tau, left, max_ink, ou
                 ink = min(wd, one) * min(max(reach - dist, zero), one)
                 paper *= one - ink
             out[r, c] = one - paper
+
+
+@njit(parallel=True, cache=True)
+def hatch_compose(strokes, k, mask, prof, edges, halo_core, ink_c, paper_c, out):
+    """``out`` (h, w, 3): the hatch picture of ``hatch.hatch`` from its buffer-size stroke ink.
+
+    The stroke amount is the ``k x k`` block mean of ``strokes`` (NaN left out) clipped to
+    [0, 1]; with ``edges``, it gives way next to the profiles (``prof``, output size) by their
+    3 x 3 maximum with edges repeated (``hatch.profile_halo``: 0 on the lines' own pixels, ink
+    >= ``halo_core``, and where the block is not fully covered), and the profiles are drawn
+    over it (``* (1 - prof)``); then ``amount (ink - paper) + paper``, clipped, in float32.
+    """
+    oh, ow = out.shape[0], out.shape[1]
+    one = np.float32(1.0)
+    zero = np.float32(0.0)
+    for r in prange(oh):
+        r = np.int64(r)
+        for c in range(ow):
+            if k == 1:
+                a = strokes[r, c]
+            else:
+                tot = 0.0
+                n = 0
+                for i in range(r * k, r * k + k):
+                    for j in range(c * k, c * k + k):
+                        v = strokes[i, j]
+                        if not np.isnan(v):
+                            tot += v
+                            n += 1
+                a = np.float32(tot / n) if n > 0 else np.float32(np.nan)
+            a = min(max(a, zero), one) if a == a else a
+            keep = one
+            if edges:
+                p = prof[r, c]
+                halo = zero
+                if not p >= halo_core:
+                    halo = np.float32(-np.inf)
+                    for dr in range(-1, 2):
+                        rr = min(max(r + dr, 0), oh - 1)
+                        for dc in range(-1, 2):
+                            cc = min(max(c + dc, 0), ow - 1)
+                            halo = max(halo, prof[rr, cc])
+                    cover = 0.0
+                    for i in range(r * k, r * k + k):
+                        for j in range(c * k, c * k + k):
+                            cover += 1.0 if mask[i, j] else 0.0
+                    if np.float32(cover / (k * k)) < one:
+                        halo = zero
+                a = a * (one - halo)
+                keep = one - p
+            for ch in range(3):
+                v = a * (ink_c[ch] - paper_c[ch])
+                v += paper_c[ch]
+                if edges:
+                    v *= keep
+                out[r, c, ch] = min(max(v, zero), one) if v == v else v

@@ -350,28 +350,14 @@ def hatch(
     else:
         tone = _tone(gb.normal, light, mask)
         strokes = _array_strokes(gb, tone, space, theta, sp, m_ink, cap_w, scale, k)
-    amount = strokes if k == 1 else gb.downsample(strokes)
-    np.clip(amount, 0.0, 1.0, out=amount)
-    keep = None
-    if edges:
-        # profiles are black whatever the ink colour (2003 edge enhancement: A channel), set
-        # off from the strokes by paper so that they stay visible over dark tones; where they
-        # crowd into a clump (a small hole), only its skeleton, so they never fill an area
-        prof = profile_ink(gb, width=pw)
-        halo = profile_halo(prof)
-        # inside the object only: at the antialiased outline the strokes keep it dark
-        halo[gb.downsample(mask.astype(np.float32)) < np.float32(1.0)] = np.float32(0.0)
-        amount *= np.float32(1.0) - halo
-        keep = np.float32(1.0) - prof
-    rgb = np.empty((*amount.shape, 3), dtype=np.float32)
-    plane = np.empty_like(amount)
-    for c in range(3):  # contiguous planes: an innermost axis of 3 makes numpy slow
-        np.multiply(amount, ink_c[c] - paper_c[c], out=plane)
-        plane += paper_c[c]
-        if keep is not None:
-            plane *= keep
-        rgb[..., c] = plane
-    return np.clip(rgb, 0.0, 1.0, out=rgb)
+    prof = profile_ink(gb, width=pw) if edges else np.zeros((1, 1), np.float32)
+    rgb = np.empty((*gb.output_shape, 3), dtype=np.float32)
+    # box filter, halo, profiles and colour per output pixel in one pass
+    _hk.hatch_compose(
+        strokes, k, np.ascontiguousarray(mask), np.ascontiguousarray(prof, dtype=np.float32), edges,
+        np.float32(HALO_CORE), ink_c, paper_c, rgb,
+    )  # fmt: skip
+    return rgb
 
 
 def _array_strokes(

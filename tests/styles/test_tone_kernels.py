@@ -115,3 +115,45 @@ def test_screen_strokes_equal_the_family_by_family_arrays(buffers, kw):
             gb.normal, gb.mask, lv, theta.astype(np.float64), sp, cap_arg, tau, left, m_ink, got
         )
         np.testing.assert_array_equal(got, ref)
+
+
+def _reference_hatch_tail(gb, strokes, edges, pw, ink_c, paper_c):
+    """The array code that turned the strokes into the picture (before the compose kernel)."""
+    k = gb.supersample
+    mask = np.asarray(gb.mask, dtype=bool)
+    amount = strokes.copy() if k == 1 else gb.downsample(strokes)
+    np.clip(amount, 0.0, 1.0, out=amount)
+    keep = None
+    if edges:
+        prof = H.profile_ink(gb, width=pw)
+        halo = H.profile_halo(prof)
+        halo[gb.downsample(mask.astype(np.float32)) < np.float32(1.0)] = np.float32(0.0)
+        amount *= np.float32(1.0) - halo
+        keep = np.float32(1.0) - prof
+    rgb = np.empty((*amount.shape, 3), dtype=np.float32)
+    plane = np.empty_like(amount)
+    for c in range(3):
+        np.multiply(amount, ink_c[c] - paper_c[c], out=plane)
+        plane += paper_c[c]
+        if keep is not None:
+            plane *= keep
+        rgb[..., c] = plane
+    return np.clip(rgb, 0.0, 1.0, out=rgb)
+
+
+@pytest.mark.parametrize("edges", [True, False])
+def test_hatch_compose_equals_the_array_tail(buffers, edges):
+    f = np.float32
+    ink_c, paper_c = np.asarray((0.1, 0.05, 0.2), f), np.asarray((1.0, 0.97, 0.9), f)
+    for gb in buffers:
+        k = gb.supersample
+        theta = H._angles(H.HATCH_ANGLES)
+        tau, left, _ = H.family_thresholds(theta.size, H.HATCH_MAX_INK)
+        strokes = np.empty(gb.shape, f)
+        H._hk.screen_strokes(
+            gb.normal, gb.mask, tone._unit_light(tone.LIGHT), theta.astype(np.float64),
+            float(H.HATCH_SPACING) * k, -1.0, tau, left, float(H.HATCH_MAX_INK), strokes,
+        )  # fmt: skip
+        ref = _reference_hatch_tail(gb, strokes, edges, 1.5, ink_c, paper_c)
+        got = H.hatch(gb, edges=edges, profile_width=1.5, ink=ink_c, paper=paper_c)
+        np.testing.assert_array_equal(got, ref)
