@@ -1154,7 +1154,7 @@ def edge_pass(
             if mode == MODE_PAIRS:
                 _store_row(prof, cre_row, n, out_a[r, a:], out_b[r, a:])
                 if two:
-                    _store_row(prof, cre_row2, n, out_a[r, a:], out_c[r, a:])
+                    out_c[r, a:b] = cre_row2[:n]
             else:
                 _edge_map_row(
                     V,

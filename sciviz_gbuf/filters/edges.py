@@ -218,37 +218,34 @@ def _dilate(ink: np.ndarray, size: int, sign: float = 0.0, scratch: str = "") ->
     return out
 
 
+def _reduce(gb: GBuffer, ink: np.ndarray, signed: bool) -> np.ndarray:
+    """A line image box-filtered to output size and clipped (:func:`._edge_kernels.finish_lines`;
+    ``signed``: the clipped positive part minus the clipped negative part)."""
+    k = _validate.count(gb.supersample, "gb.supersample", "supersample")
+    out = np.empty(gb.output_shape, dtype=np.float32)
+    _k.finish_lines(np.ascontiguousarray(ink, dtype=np.float32), k, signed, out)
+    return out
+
+
 def _finish(gb: GBuffer, *inks: np.ndarray, width: float) -> list[np.ndarray]:
     """Dilate one-pixel line images to ``width`` output pixels and reduce them to output size
-    (box filter and clip to [0, 1] in one pass, :func:`._edge_kernels.finish_lines`)."""
+    (box filter and clip to [0, 1] in one pass)."""
     size = max(1, round(width * gb.supersample))
-    k = _validate.count(gb.supersample, "gb.supersample", "supersample")
-    res = []
-    for ink in inks:
-        if size > 1:
-            ink = _dilate(ink, size, scratch="dilated")
-        out = np.empty(gb.output_shape, dtype=np.float32)
-        _k.finish_lines(np.ascontiguousarray(ink, dtype=np.float32), k, False, out)
-        res.append(out)
-    return res
+    return [
+        _reduce(gb, _dilate(ink, size, scratch="dilated") if size > 1 else ink, False)
+        for ink in inks
+    ]
 
 
 def _finish_signed(gb: GBuffer, signed: np.ndarray, width: float) -> np.ndarray:
     """:func:`_finish` of the positive and the negative part, the second subtracted; one pass
     where no dilation is needed."""
     size = max(1, round(width * gb.supersample))
-    if size > 1:
-        pos, neg = _finish(
-            gb,
-            _dilate(signed, size, 1.0, scratch="dilated+"),
-            _dilate(signed, size, -1.0, scratch="dilated-"),
-            width=1.0 / gb.supersample,
-        )
-        return (pos - neg).astype(np.float32, copy=False)
-    k = _validate.count(gb.supersample, "gb.supersample", "supersample")
-    out = np.empty(gb.output_shape, dtype=np.float32)
-    _k.finish_lines(np.ascontiguousarray(signed, dtype=np.float32), k, True, out)
-    return out
+    if size == 1:
+        return _reduce(gb, signed, True)
+    pos = _reduce(gb, _dilate(signed, size, 1.0, scratch="dilated+"), False)
+    neg = _reduce(gb, _dilate(signed, size, -1.0, scratch="dilated-"), False)
+    return (pos - neg).astype(np.float32, copy=False)
 
 
 def profile_edges(

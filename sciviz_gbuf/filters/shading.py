@@ -9,7 +9,21 @@ import numpy as np
 from .. import _validate
 from ..errors import InputError
 
-__all__ = ["lambert"]
+__all__ = ["lambert", "unit_light"]
+
+
+def unit_light(light: Sequence[float]) -> np.ndarray:
+    """The direction towards the light, normalised, as float32 ``(3,)`` (the one
+    :func:`lambert` shades with), or an :class:`InputError` naming ``light``."""
+    try:
+        lv = np.asarray(light, dtype=np.float64).reshape(-1)
+    except (TypeError, ValueError, OverflowError):
+        lv = np.zeros(0)
+    if lv.size != 3 or not np.isfinite(lv).all() or not np.linalg.norm(lv) > 0:
+        raise InputError(
+            f"light: expected a finite non-zero 3-vector, got {_validate.brief(light)}"
+        )
+    return (lv / np.linalg.norm(lv)).astype(np.float32)
 
 
 def lambert(
@@ -41,17 +55,9 @@ def lambert(
     n = np.asarray(normal)
     if n.ndim != 3 or n.shape[2] != 3 or not np.issubdtype(n.dtype, np.number):
         raise InputError(f"normal: expected an (H, W, 3) array of numbers, got {n.dtype} {n.shape}")
-    try:
-        lv = np.asarray(light, dtype=np.float64).reshape(-1)
-    except (TypeError, ValueError, OverflowError):
-        lv = np.zeros(0)
-    if lv.size != 3 or not np.isfinite(lv).all() or not np.linalg.norm(lv) > 0:
-        raise InputError(
-            f"light: expected a finite non-zero 3-vector, got {_validate.brief(light)}"
-        )
+    lv = unit_light(light)
     ambient = _validate.unit_interval(ambient, "ambient")
     m = _validate.mask(mask, n.shape[:2])
-    lv = (lv / np.linalg.norm(lv)).astype(np.float32)
     n = n.astype(np.float32, copy=False)
     # N.L summed component by component in float32 (as the styles' one-pass kernels sum it)
     ndl = n[..., 0] * lv[0]

@@ -44,6 +44,7 @@ from .. import _validate
 from ..core.gbuffer import GBuffer, check_gbuffer
 from ..errors import InputError
 from ..filters import lambert
+from ..filters.shading import unit_light
 from . import _hatch_kernels as _hk
 from .illustration import LIGHT, PAPER, profile_ink
 from .registry import register
@@ -333,12 +334,10 @@ def hatch(
         # Every family per pixel in one pass (the arithmetic of _array_strokes, value for value).
         tau, left, _ = family_thresholds(theta.size, m_ink)
         strokes = np.empty((h, w), dtype=np.float32)
-        lambert(gb.normal[:1, :1], light=light)  # its checks (and their errors)
-        lv = np.asarray(light, dtype=np.float64).reshape(-1)
         _hk.screen_strokes(
             np.ascontiguousarray(gb.normal, dtype=np.float32),
             mask,
-            (lv / np.linalg.norm(lv)).astype(np.float32),
+            unit_light(light),
             theta.astype(np.float64),
             float(sp),
             -1.0 if cap_w is None else float(cap_w),

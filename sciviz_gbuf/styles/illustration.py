@@ -14,8 +14,9 @@ import numpy as np
 from .. import _validate
 from ..core.gbuffer import GBuffer, check_gbuffer
 from ..errors import InputError
-from ..filters import edge_map, enhance, lambert, profile_and_crease_edges, profile_edges
+from ..filters import edge_map, enhance, profile_and_crease_edges, profile_edges
 from ..filters.edges import INNER_COLOR
+from ..filters.shading import unit_light
 from . import _tone_kernels as _tk
 from ._ink import clump_cut
 from .registry import check_style, register, styles_for
@@ -69,14 +70,12 @@ def shade_image(
     gb = check_gbuffer(gb)
     if not 0.0 < _validate.finite(highlight, "highlight") <= 1.0:
         raise InputError(f"highlight: expected a value in (0, 1], got {_validate.brief(highlight)}")
-    lambert(gb.normal[:1, :1], light=light, ambient=ambient)  # the checks (and their errors)
-    lv = np.asarray(light, dtype=np.float64).reshape(-1)
     out = np.empty(gb.output_shape, dtype=np.float32)
     # lambert, the paper and the box filter per output pixel in one pass (same arithmetic)
     _tk.lambert_shade(
         np.ascontiguousarray(gb.normal, dtype=np.float32),
         np.ascontiguousarray(gb.mask, dtype=np.bool_),
-        (lv / np.linalg.norm(lv)).astype(np.float32),
+        unit_light(light),
         float(_validate.unit_interval(ambient, "ambient")),
         float(highlight),
         _validate.count(gb.supersample, "gb.supersample", "supersample"),
