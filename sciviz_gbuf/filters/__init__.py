@@ -4,7 +4,7 @@ line images are ink in [0, 1] with 1 = full ink (signed images are documented as
 
 from .bands import BATHYMETRIC, HYPSOMETRIC, color_bands, composite_map
 from .contour_vectors import ContourPolyline, contour_polylines, polylines_to_geojson
-from .contours import band_heights, contour_lines, hatching
+from .contours import band_heights, contour_lines, hatching, modulated_hatching
 from .edges import (
     crease_edges,
     edge_map,
@@ -52,6 +52,7 @@ __all__ = [
     "internal_edges",
     "isophotes",
     "lambert",
+    "modulated_hatching",
     "normalize_gradient",
     "polylines_to_geojson",
     "profile_and_crease_edges",

@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from ._contour_kernels import hatch_ink, levels_ink, regular_ink
+from ._contour_kernels import NPRM, hatch_ink, levels_ink, regular_ink
 
 __all__ = ["diag_normal", "run"]
 
@@ -94,7 +94,9 @@ def _suppress(x, a, b, c, d, e, f, g, h, k, aux, prm):
 
 # Operator codes: they pick the border rule and the neutral value; the operator itself is
 # passed to the row loop as a function, so each kernel compiles only its own operator.
-SOBEL, SECOND, C1, DIAG_DEPTH, NORMALIZE, SUPPRESS, CONTOUR, LEVELS, HATCH = range(9)
+(SOBEL, SECOND, C1, DIAG_DEPTH, NORMALIZE, SUPPRESS, CONTOUR, LEVELS, HATCH, MODULATED_HATCH) = (
+    range(10)
+)
 
 
 @njit(inline="always", cache=True)
@@ -139,6 +141,20 @@ def _levels(x, a, b, c, d, e, f, g, h, k, aux, prm):
 @njit(inline="always", cache=True)
 def _hatch(x, a, b, c, d, e, f, g, h, k, aux, prm):
     return hatch_ink(x, aux if k > 0 else _grad(x, a, b, c, d, e, f, g, h, k, aux, prm), prm)
+
+
+@njit(inline="always", cache=True)
+def _modulated_hatch(x, a, b, c, d, e, f, g, h, k, aux, prm):
+    """Hatching at two widths from one gradient (``prm``: the full line's parameters, the thin
+    line's at ``NPRM``), blended by the modulation ``aux`` (``contours.modulated_hatching``)."""
+    own = _grad(x, a, b, c, d, e, f, g, h, k, aux, prm)
+    full = hatch_ink(x, own, prm)
+    thin = hatch_ink(x, own, prm[NPRM:])
+    m = min(aux if aux > 0 else np.float32(0.0), _ONE)  # clipped to [0, 1], NaN -> 0
+    if m >= _H:
+        t = min(max(_TWO * m - _ONE, np.float32(0.0)), _ONE)
+        return thin + t * (full - thin)
+    return _TWO * m * thin
 
 
 @njit(inline="always", cache=True)
@@ -382,6 +398,11 @@ def _k_hatch(img, m, k, aux, prm, out):
     _rows(HATCH, _hatch, img, m, k, aux, prm, out)
 
 
+@njit(parallel=True, cache=True, fastmath={"contract"})
+def _k_modulated_hatch(img, m, k, aux, prm, out):
+    _rows(MODULATED_HATCH, _modulated_hatch, img, m, k, aux, prm, out)
+
+
 _KERNELS = {
     "sobel": _k_sobel,
     "second": _k_second,
@@ -392,6 +413,7 @@ _KERNELS = {
     "contour": _k_contour,
     "levels": _k_levels,
     "hatch": _k_hatch,
+    "modulated_hatch": _k_modulated_hatch,
 }
 
 

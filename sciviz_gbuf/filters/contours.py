@@ -34,7 +34,7 @@ from . import _contour_generalize as _gen
 from . import _contour_kernels as _p
 from . import _stencil_kernels as _stencil
 
-__all__ = ["band_heights", "contour_halo", "contour_lines", "hatching"]
+__all__ = ["band_heights", "contour_halo", "contour_lines", "hatching", "modulated_hatching"]
 
 # f1 per profile: the width W of its ramp (px) and P(v) = v (p1 + v (p2 + v p3)) along it: a
 # step; a linear ramp one pixel wide, the exact area coverage of a pixel by a straight line;
@@ -466,6 +466,13 @@ def hatching(
     -------
     (H, W) float32 ink in [0, 1]; 0 where masked, not finite or without a gradient.
     """
+    prm = _hatch_params(spacing, width, interval, base, profile, transition)
+    s, m, g = _prepare(field, mask, gradient)
+    return _run("hatch", s, m, g, prm)
+
+
+def _hatch_params(spacing, width, interval, base, profile, transition) -> np.ndarray:
+    """The kernel parameters of :func:`hatching` (float64), every argument validated."""
     prm = _params(width, profile)
     prm[_p.SPACING] = _validate.size(spacing, "spacing", "spacing", buffer=True)
     prm[_p.Q] = _validate.positive(interval, "interval")
@@ -473,8 +480,60 @@ def hatching(
     fade = _validate.finite(transition, "transition")
     if not 0 < fade <= 1:
         raise InputError(f"transition: expected a number in (0, 1], got {transition!r}")
-    s, m, g = _prepare(field, mask, gradient)
     # Centre the fade on 4/3 (equal worst cases 4/3 and 2/3 of d_i) if it fits in (1, 2].
     prm[_p.SWITCH] = min(max(4 / 3, 1 + fade / 2), 2 - fade / 2)
     prm[_p.INV_FADE] = 1 / fade
-    return _run("hatch", s, m, g, prm)
+    return prm
+
+
+def modulated_hatching(
+    field: np.ndarray,
+    modulation: np.ndarray,
+    *,
+    spacing: float = 8.0,
+    width: float = 1.0,
+    mask: np.ndarray | None = None,
+    interval: float = 1.0,
+    base: float = 0.0,
+    profile: str = "linear",
+    transition: float = 0.04,
+) -> np.ndarray:
+    """Curved hatching whose lines thin out and fade with a modulation: Fig. 9's hatching
+    "enhanced with the sh image" (1990 §4.2), in one pass.
+
+    With ``full`` = :func:`hatching` at ``width`` and ``thin`` = at ``width / 2`` (Eq. 17-21,
+    same field, spacing and gradient), the ink is ``thin + (2 m - 1)(full - thin)`` where the
+    modulation ``m >= 0.5`` (the line's edges move out as ``m`` goes to 1) and ``2 m thin``
+    below (the thin line fades to nothing at ``m = 0``). Narrowing before fading keeps the
+    lines crisp, which is what survives copying (Fig. 10). The same as computing both
+    hatchings and blending them, within float32 rounding (the blend may be fused into one
+    multiply-add), for the price of one: the gradient (Eq. 9) is taken once.
+
+    Parameters
+    ----------
+    field : (H, W) array
+        As in :func:`hatching` (NaN/inf: masked).
+    modulation : (H, W) array of numbers in [0, 1]
+        How strongly the lines are drawn, e.g. :func:`sciviz_gbuf.styles.modulation` of a
+        shade; values outside [0, 1] are clipped to it, NaN is read as 0 (no ink).
+    spacing, width, mask, interval, base, profile, transition
+        As in :func:`hatching` (the same bounds).
+
+    Returns
+    -------
+    (H, W) float32 ink in [0, 1]; 0 where masked, not finite or without a gradient.
+    """
+    full = _hatch_params(spacing, width, interval, base, profile, transition)
+    d = _validate.size(width, "width", "line_width", buffer=True)
+    thin = _hatch_params(spacing, 0.5 * d, interval, base, profile, transition)
+    s, m, _ = _prepare(field, mask, None)
+    mod = np.asarray(modulation)
+    if mod.shape != s.shape or not np.issubdtype(mod.dtype, np.number):
+        raise InputError(
+            f"modulation: expected an array of numbers shaped like field {s.shape}, got "
+            f"{mod.dtype} {mod.shape}"
+        )
+    mod = np.ascontiguousarray(mod, dtype=np.float32)
+    # the thin line's parameters follow the full one's (the kernel reads them at NPRM)
+    prm = np.concatenate([full, thin]).astype(np.float32)
+    return _stencil.run("modulated_hatch", s, m, aux=mod, prm=prm)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-__all__ = ["gooch_shade", "lambert_shade", "toon_shade"]
+__all__ = ["gooch_shade", "lambert_shade", "modulation_image", "toon_shade"]
 
 
 @njit(inline="always", cache=True)
@@ -142,3 +142,29 @@ def lambert_shade(normal, mask, light, ambient, highlight, k, out):
             else:
                 v = np.float32(tot / n)
                 out[r, col] = min(max(v, zero), one)
+
+
+@njit(parallel=True, cache=True)
+def modulation_image(normal, mask, light, none, full, out):
+    """``out`` (h, w): ``lines.modulation(filters.lambert(normal, light=light, mask=mask))``
+    value for value at the buffer resolution, without the shade image in between: the
+    smoothstep of the tone ``1 - max(N.L, 0)`` from ``none`` to ``full`` (float32, N.L summed
+    component by component as ``lambert`` does); 0 off the mask and where N.L is NaN."""
+    h, w = mask.shape
+    lx, ly, lz = light[0], light[1], light[2]
+    one = np.float32(1.0)
+    zero = np.float32(0.0)
+    lo = np.float32(none)
+    span = np.float32(full - none)
+    three = np.float32(3.0)
+    two = np.float32(2.0)
+    for r in prange(h):
+        r = np.int64(r)
+        for c in range(w):
+            d = normal[r, c, 0] * lx
+            d += normal[r, c, 1] * ly
+            d += normal[r, c, 2] * lz
+            # NaN shade (off the mask, NaN normal) is read as 1 (lit): tone 0, no ink
+            s = min(max(d, zero), one) if (mask[r, c] and d == d) else one
+            x = min(max(((one - s) - lo) / span, zero), one)
+            out[r, c] = x * x * (three - two * x)

@@ -21,8 +21,10 @@ from scipy import ndimage
 from .. import _validate
 from ..core.gbuffer import GBuffer, check_gbuffer
 from ..errors import InputError
-from ..filters import hatching, lambert, profile_edges
+from ..filters import hatching, lambert, modulated_hatching, profile_edges
+from ..filters.shading import unit_light
 from ._ink import declump
+from ._tone_kernels import modulation_image
 from .illustration import LIGHT
 from .registry import register
 
@@ -64,11 +66,30 @@ def modulation(shade: np.ndarray) -> np.ndarray:
     return (x * x * (np.float32(3.0) - np.float32(2.0) * x)).astype(np.float32)
 
 
+def _field(gb: GBuffer, index: int) -> np.ndarray:
+    """``gb.uv[..., index]`` as the hatching kernels read it (the mask goes with it)."""
+    return np.ascontiguousarray(gb.uv[..., index], dtype=np.float32)
+
+
 def _hatch(gb: GBuffer, index: int, spacing: float, width: float) -> np.ndarray:
     """Curved hatching (Eq. 17-21) of ``gb.uv[..., index]`` at the buffer resolution."""
     k = gb.supersample
-    field = np.where(gb.mask, gb.uv[..., index], np.nan).astype(np.float32)
-    return hatching(field, spacing=spacing * k, width=width * k, mask=gb.mask)
+    return hatching(_field(gb, index), spacing=spacing * k, width=width * k, mask=gb.mask)
+
+
+def _modulation(gb: GBuffer, light: Sequence[float]) -> np.ndarray:
+    """:func:`modulation` of the Lambert shade of ``gb`` at the buffer resolution, in one pass
+    (the same values as ``modulation(lambert(gb.normal, light=light, mask=gb.mask))``)."""
+    out = np.empty(gb.shape, dtype=np.float32)
+    modulation_image(
+        np.ascontiguousarray(gb.normal, dtype=np.float32),
+        np.ascontiguousarray(gb.mask, dtype=np.bool_),
+        unit_light(light),
+        TONE_NONE,
+        TONE_FULL,
+        out,
+    )
+    return out
 
 
 def _enhanced(gb: GBuffer, index: int, spacing: float, width: float, m: np.ndarray):
@@ -78,11 +99,13 @@ def _enhanced(gb: GBuffer, index: int, spacing: float, width: float, m: np.ndarr
     they narrow to half that width (a blend of the two antialiased line images, which moves
     the line's edges); below, the thin line fades out. Narrowing first keeps the lines crisp
     (black), which is what survives copying (Fig. 10); only the lightest tones get faint ink.
+    Both widths and the blend are one stencil pass (:func:`~sciviz_gbuf.filters.
+    modulated_hatching`).
     """
-    full = _hatch(gb, index, spacing, width)
-    thin = _hatch(gb, index, spacing, 0.5 * width)
-    a = np.clip(2.0 * m - 1.0, 0.0, 1.0)
-    return np.where(m >= 0.5, thin + a * (full - thin), 2.0 * m * thin).astype(np.float32)
+    k = gb.supersample
+    return modulated_hatching(
+        _field(gb, index), m, spacing=spacing * k, width=width * k, mask=gb.mask
+    )
 
 
 def line_drawing(
@@ -133,8 +156,9 @@ def line_drawing(
     needs_uv = "u" in combo or "v" in combo
     if needs_uv and gb.uv is None:
         raise InputError(f"combo: {combo!r} needs texture coordinates (u, v), but gb.uv is None")
-    shade = lambert(gb.normal, light=light, mask=gb.mask)  # validates light; NaN off the mask
+    unit_light(light)  # validates light
     if combo == "sh":
+        shade = lambert(gb.normal, light=light, mask=gb.mask)  # NaN off the mask
         return np.clip(gb.downsample(np.where(gb.mask, shade, 1.0)), 0, 1).astype(np.float32)
     # A line drawing never fills an area: where lines converge into a solid clump (the inner
     # rim of a torus meeting its silhouette, profiles crowding at grazing angles) only the
@@ -145,7 +169,7 @@ def line_drawing(
     if combo in ("cu", "cv"):
         ink = gb.downsample(_hatch(gb, "uv".index(combo[1]), sp, wd))
         return np.clip(1.0 - declump(ink, wd), 0.0, 1.0).astype(np.float32)
-    m = modulation(shade)
+    m = _modulation(gb, light)
     ink = profile_edges(gb, width=pw)
     for name in combo[2:]:
         ink = np.maximum(ink, gb.downsample(_enhanced(gb, "uv".index(name), sp, wd, m)))

@@ -75,6 +75,10 @@ OTHER_FILTERS = {
         None,
     ),
     "fill_nodata_ring": (lambda gb, **kw: F.fill_nodata_ring(FIELD, **kw), (N, N)),
+    "modulated_hatching": (
+        lambda gb, **kw: F.modulated_hatching(FIELD, np.full(FIELD.shape, 0.7), **kw),
+        (N, N),
+    ),
     "band_heights": (
         lambda gb, **kw: F.band_heights(FIELD, **({"band_interval": 2.0} | kw)),
         (N, N),
@@ -235,6 +239,8 @@ BEYOND = [
     ("contour_lines", {"major_interval": 5.0, "major_width": 1e4}, "major_width"),
     ("hatching", {"spacing": 1e6}, "spacing"),
     ("hatching", {"width": 1e4}, "width"),
+    ("modulated_hatching", {"spacing": 1e6}, "spacing"),
+    ("modulated_hatching", {"width": 1e4}, "width"),
     ("contour_polylines", {"levels": np.linspace(100, 200, 10**6), "interval": None}, "levels"),
     ("contour_polylines", {"interval": 1e-9}, "levels"),
     ("color_bands", {"levels": np.linspace(0, 10, 5000), "interval": None}, "levels"),

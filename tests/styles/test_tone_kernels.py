@@ -157,3 +157,56 @@ def test_hatch_compose_equals_the_array_tail(buffers, edges):
         ref = _reference_hatch_tail(gb, strokes, edges, 1.5, ink_c, paper_c)
         got = H.hatch(gb, edges=edges, profile_width=1.5, ink=ink_c, paper=paper_c)
         np.testing.assert_array_equal(got, ref)
+
+
+@pytest.mark.parametrize("light", [(0.3, 0.5, 1.0), (-1.0, 0.2, 0.1)])
+def test_drawing_modulation_equals_lambert_then_modulation(buffers, light):
+    L = importlib.import_module("sciviz_gbuf.styles.lines")
+    for gb in buffers:
+        ref = L.modulation(lambert(gb.normal, light=light, mask=gb.mask))
+        np.testing.assert_array_equal(L._modulation(gb, light), ref)
+
+
+def _reference_enhanced(gb, index, spacing, width, m):
+    """Two hatchings of the masked field and the blend (the code the one pass replaced)."""
+    k = gb.supersample
+    field = np.where(gb.mask, gb.uv[..., index], np.nan).astype(np.float32)
+    full = sg.filters.hatching(field, spacing=spacing * k, width=width * k, mask=gb.mask)
+    thin = sg.filters.hatching(field, spacing=spacing * k, width=0.5 * width * k, mask=gb.mask)
+    a = np.clip(2.0 * m - 1.0, 0.0, 1.0)
+    return np.where(m >= 0.5, thin + a * (full - thin), 2.0 * m * thin).astype(np.float32)
+
+
+@pytest.mark.parametrize(("spacing", "width"), [(6.0, 1.0), (3.0, 2.5), (12.0, 0.6)])
+def test_drawing_hatching_equals_two_hatchings_and_the_blend(buffers, spacing, width):
+    L = importlib.import_module("sciviz_gbuf.styles.lines")
+    for gb in buffers:
+        gb = L.with_section_uv(gb)
+        m = L._modulation(gb, (0.3, 0.5, 1.0))
+        on = m[gb.mask]
+        assert (on < 0.5).any() and (on > 0.5).any()  # both branches of the blend are met
+        for index in (0, 1):
+            ref = _reference_enhanced(gb, index, spacing, width, m)
+            got = L._enhanced(gb, index, spacing, width, m)
+            assert got.dtype == np.float32
+            # the same up to a fused multiply-add in the blend
+            np.testing.assert_allclose(got, ref, rtol=0, atol=2e-7)
+            assert (ref > 0.2).sum() > 20  # there are lines
+
+
+def test_modulated_hatching_reads_nan_as_no_ink_and_clips():
+    y, x = np.mgrid[0:40, 0:50].astype(np.float32)
+    field = 0.37 * x + 0.11 * y
+    full = sg.filters.hatching(field, spacing=6.0, width=2.0)
+    ones = sg.filters.modulated_hatching(field, np.full(field.shape, 1.0), spacing=6.0, width=2.0)
+    np.testing.assert_allclose(ones, full, atol=2e-7)
+    over = sg.filters.modulated_hatching(field, np.full(field.shape, 7.0), spacing=6.0, width=2.0)
+    np.testing.assert_array_equal(over, ones)
+    nan = sg.filters.modulated_hatching(field, np.full(field.shape, np.nan), spacing=6.0, width=2.0)
+    neg = sg.filters.modulated_hatching(field, np.full(field.shape, -3.0), spacing=6.0, width=2.0)
+    assert not nan.any() and not neg.any()
+    half = sg.filters.modulated_hatching(field, np.full(field.shape, 0.5), spacing=6.0, width=2.0)
+    thin = sg.filters.hatching(field, spacing=6.0, width=1.0)
+    np.testing.assert_allclose(half, thin, atol=2e-7)
+    with pytest.raises(sg.InputError, match="modulation"):
+        sg.filters.modulated_hatching(field, np.ones((3, 3)))
