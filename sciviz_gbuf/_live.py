@@ -36,11 +36,14 @@ from typing import Any
 
 import numpy as np
 from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
+from vtkmodules.vtkCommonCore import vtkFloatArray
 from vtkmodules.vtkCommonDataModel import vtkImageData
 from vtkmodules.vtkRenderingCore import vtkActor2D, vtkImageMapper, vtkRenderer
 
 from . import _validate
+from .core.camera import CameraInfo
 from .core.capture import CaptureSession
+from .core.frame import gbuffer_from_zbuffer, read_zbuffer
 from .core.gbuffer import GBuffer
 from .errors import InputError
 from .filters import edge_map, profile_and_crease_edges
@@ -50,6 +53,7 @@ from .styles.illustration import fig7_edge_map
 __all__ = [
     "CLIENT_SIDE_WARNING",
     "LIVE_STYLES",
+    "SOURCES",
     "EdgeParams",
     "LiveEdges",
     "client_side_views",
@@ -70,6 +74,12 @@ CLIENT_SIDE_WARNING = (
 #: Styles of the live overlay (an RGBA image composited over the normal rendering), from the
 #: styles registry.
 LIVE_STYLES = styles_for("live")
+
+#: Where the overlay's G-buffer comes from: ``capture`` renders the subplot's scene once more
+#: offscreen (exact channels, any supersample); ``frame`` reads the depth of the frame being
+#: drawn (no second render; see :mod:`sciviz_gbuf.core.frame`); ``auto`` takes ``frame``
+#: where it is exact (a window without multisampling, supersample 1), else ``capture``.
+SOURCES = ("auto", "capture", "frame")
 
 
 def _color(value: object, name: str) -> tuple[float, float, float]:
@@ -92,6 +102,7 @@ class EdgeParams:
     inner_color: tuple[float, float, float] = (1.0, 1.0, 1.0)
     profile_color: tuple[float, float, float] = (0.0, 0.0, 0.0)
     opacity: float = 1.0
+    source: str = "auto"
 
     @classmethod
     def checked(
@@ -106,6 +117,7 @@ class EdgeParams:
         inner_color: Sequence[float],
         profile_color: Sequence[float],
         opacity: float,
+        source: str = "auto",
     ) -> EdgeParams:
         """Validate everything up front: a bad value must fail at the call, not mid-frame."""
         style = check_style(style, "live")
@@ -117,6 +129,12 @@ class EdgeParams:
             or not 1 <= supersample <= 4
         ):
             raise InputError(f"supersample: expected an integer in [1, 4], got {supersample!r}")
+        source = _validate.choice(source, "source", SOURCES)
+        if source == "frame" and supersample != 1:
+            raise InputError(
+                "supersample: source='frame' reads the frame's own depth, at its own size: "
+                f"expected 1, got {supersample!r}"
+            )
         return cls(
             style=style,
             operator=operator,
@@ -127,6 +145,7 @@ class EdgeParams:
             inner_color=_color(inner_color, "inner_color"),
             profile_color=_color(profile_color, "profile_color"),
             opacity=_validate.number_in(opacity, "opacity", 0.0, 1.0),
+            source=source,
         )
 
 
@@ -252,6 +271,10 @@ class LiveEdges:
         self._session: CaptureSession | None = None
         self._scene_key: object = None
         self._observer: int | None = None
+        self._overlay_observer: int | None = None
+        self._zbuffer = vtkFloatArray()  # the frame route's read-back, kept between frames
+        #: The route of the last update: "capture" or "frame".
+        self.route: str | None = None
         self._layer: int | None = None
         self._warned_client_side = False
 
@@ -269,6 +292,9 @@ class LiveEdges:
         self._overlay.SetViewport(self._renderer.GetViewport())
         window.AddRenderer(self._overlay)
         self._observer = window.AddObserver("StartEvent", self._on_start)
+        # The overlay's own renderer starts after every lower layer is drawn: the frame route
+        # reads the enhanced subplot's depth there, before the overlay draws over it.
+        self._overlay_observer = self._overlay.AddObserver("StartEvent", self._on_overlay_start)
         # PyVista calls these on every plotter.render(), even when rendering is suppressed
         self._plotter.add_on_render_callback(self._on_plotter_render, render_event=False)
         self._on_plotter_render(self._plotter)
@@ -281,6 +307,9 @@ class LiveEdges:
         if self._observer is not None:
             window.RemoveObserver(self._observer)
             self._observer = None
+        if self._overlay_observer is not None:
+            self._overlay.RemoveObserver(self._overlay_observer)
+            self._overlay_observer = None
         # PyVista has no public way to remove one render callback (only to clear them all)
         callbacks = getattr(self._plotter, "_on_render_callbacks", None)
         if callbacks is not None:
@@ -357,15 +386,38 @@ class LiveEdges:
             )
         return tuple(props)
 
+    def _route(self) -> str:
+        """``frame`` or ``capture`` for this frame (see :data:`SOURCES`)."""
+        source = self.params.source
+        if source == "auto":
+            # Exact only where the depth is the pixel centre's: one sample per pixel, drawn by
+            # the renderer itself (a render pass such as PyVista's SSAA, EDL or SSAO draws
+            # into buffers of its own, and its depth is not the frame's).
+            window = self._window
+            single = window is not None and window.GetMultiSamples() <= 1
+            plain = self._renderer.GetPass() is None
+            return "frame" if single and plain and self.params.supersample == 1 else "capture"
+        return source
+
     def _on_start(self, _obj: object, _event: str) -> None:
+        """The window starts a frame: the capture route updates before anything is drawn."""
+        if self._route() == "capture":
+            self._refresh("capture")
+
+    def _on_overlay_start(self, _obj: object, _event: str) -> None:
+        """The subplot is drawn, the overlay is next: the frame route reads its depth now."""
+        if self._route() == "frame":
+            self._refresh("frame")
+
+    def _refresh(self, route: str) -> None:
         if self._busy:  # our own capture never renders this window, but never loop anyway
             return
-        key = self._view_key()
+        key = (route, self._view_key())
         if key == self._key:
             return
         self._busy = True
         try:
-            self.update()
+            self.update(route)
             self._key = key
         except Exception as exc:  # an observer must not raise into VTK: warn, show nothing
             self._set_pixels(np.zeros((1, 1, 4), np.uint8))
@@ -404,10 +456,22 @@ class LiveEdges:
             reuse=True,  # nothing is kept from frame to frame (last_gbuffer: until the next)
         )
 
-    def update(self) -> None:
-        """Capture now and upload a new overlay (called by the frame observer)."""
+    def frame_gbuffer(self) -> GBuffer | None:
+        """G-buffer of the subplot from the depth of the frame being drawn (None: empty)."""
+        ren = self._renderer
+        w, h = (int(v) for v in ren.GetSize())
+        if w < 1 or h < 1 or self._window is None:
+            return None
+        z = read_zbuffer(self._window, ren.GetOrigin(), (w, h), out=self._zbuffer)
+        gb = gbuffer_from_zbuffer(z, CameraInfo.from_vtk(ren.GetActiveCamera(), (w, h)))
+        return gb if gb.mask.any() else None
+
+    def update(self, route: str = "capture") -> None:
+        """Make the G-buffer by ``route`` now and upload a new overlay (called by the frame
+        observers: ``capture`` before the frame, ``frame`` after the subplot is drawn)."""
         self._overlay.SetViewport(self._renderer.GetViewport())
-        gb = self.capture()
+        gb = self.frame_gbuffer() if route == "frame" else self.capture()
+        self.route = route
         self.updates += 1
         self.last_gbuffer = gb
         if gb is None:

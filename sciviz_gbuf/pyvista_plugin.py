@@ -345,13 +345,14 @@ class GBufPlotterComponent:
         inner_color: Sequence[float] = (1.0, 1.0, 1.0),
         profile_color: Sequence[float] = (0.0, 0.0, 0.0),
         opacity: float = 1.0,
+        source: str = "auto",
     ) -> Any:
         """Draw the edge map over every frame of the active subplot, updated as the view moves.
 
-        Before a frame is drawn, if the camera, the window size or any actor or its data changed
-        since the previous frame, the subplot is captured offscreen (a separate render) and its
-        edge map composited over the normal rendering of that subplot only. Calling it again
-        replaces the parameters.
+        In a frame where the camera, the window size or any actor or its data changed since
+        the previous one, the subplot's G-buffer is made anew (from that frame's own depth, or
+        by an offscreen capture: ``source``) and its edge map composited over the normal
+        rendering of that subplot only. Calling it again replaces the parameters.
 
         Parameters
         ----------
@@ -369,6 +370,17 @@ class GBufPlotterComponent:
             Default white and black.
         opacity : float in [0, 1], default: 1
             Scales the edge ink.
+        source : {"auto", "frame", "capture"}, default: "auto"
+            Where the edges come from. ``frame``: the depth of the frame being drawn, read
+            back once the subplot is drawn (no second render: the cost is the read-back and the
+            edge map; normals from the depth, see :mod:`sciviz_gbuf.core.frame`; supersample
+            1). ``capture``: a separate offscreen render of the subplot's surfaces (exact
+            interpolated normals, supersampling). ``auto``: ``frame`` where it gives the same
+            lines as ``capture`` (a window without multisampling, supersample 1), else
+            ``capture``. With multisampling (PyVista's default anti-aliasing), the driver's
+            depth resolve moves ``frame`` lines by up to a pixel, and a render pass of the
+            subplot (SSAA, EDL, SSAO) draws into buffers of its own: ``auto`` captures there;
+            ``pl.disable_anti_aliasing()`` lets it take the frame.
 
         Returns
         -------
@@ -397,6 +409,7 @@ class GBufPlotterComponent:
             inner_color=inner_color,
             profile_color=profile_color,
             opacity=opacity,
+            source=source,
         )
         renderer = self._plotter.renderer
         self.disable_edge_enhancement()

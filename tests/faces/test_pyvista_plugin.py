@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 import pyvista as pv
 from pyvista import examples
+from scipy import ndimage
 from vtkmodules.util.numpy_support import vtk_to_numpy
 
 import sciviz_gbuf as sg
@@ -322,4 +323,48 @@ def test_live_uploaded_pixels_are_the_rounded_overlay(nut):
         expected = np.round(overlay_rgba(live.last_gbuffer, live.params) * 255.0).astype(np.uint8)
         got = vtk_to_numpy(live._image.GetPointData().GetScalars()).reshape(180, 240, 4)[::-1]
         np.testing.assert_array_equal(got, expected)
+    pl.close()
+
+
+@pytest.mark.parametrize("source", ["auto", "frame"])
+def test_live_frame_route_matches_capture_without_a_second_render(nut, source):
+    pl = pv.Plotter(off_screen=True, window_size=(400, 300))
+    pl.add_mesh(nut)
+    pl.disable_anti_aliasing()
+    pl.render_window.SetMultiSamples(0)  # one depth sample per pixel: auto takes the frame
+    pl.gbuf.enable_edge_enhancement(inner_color=BLUE, profile_color=RED, source=source)
+    for step in range(2):
+        img = pl.screenshot()
+        assert pl.gbuf.live.route == "frame"
+        assert pl.gbuf.live._session is None  # no capture session: nothing rendered twice
+        emap = edge_map(sg.capture(pl), operator="diagonal", crease_angle=30.0)
+        prof_ok, inner_ok, stray, n_prof = _agreement(img, emap)
+        assert n_prof > 500
+        assert prof_ok >= 0.95, (step, prof_ok)
+        assert inner_ok >= 0.95, (step, inner_ok)
+        assert stray <= 0.02, (step, stray)
+        pl.camera.azimuth += 30
+        pl.render()
+    assert pl.gbuf.live.updates == 3
+    pl.close()
+
+
+def test_live_auto_captures_where_the_frame_depth_is_not_exact(nut):
+    pl = pv.Plotter(off_screen=True, window_size=(200, 150))
+    pl.add_mesh(nut)
+    assert pl.render_window.GetMultiSamples() > 1  # PyVista's default anti-aliasing
+    pl.gbuf.enable_edge_enhancement()
+    pl.screenshot()
+    assert pl.gbuf.live.route == "capture"
+    pl.gbuf.enable_edge_enhancement(source="frame")  # asked for: taken, up to a pixel off
+    img = pl.screenshot()
+    assert pl.gbuf.live.route == "frame"
+    emap = edge_map(sg.capture(pl))
+    black = np.all(img[..., :3] < 60, axis=-1)
+    near = ndimage.binary_dilation(black)
+    assert near[emap[..., 3] >= 0.9].mean() >= 0.95
+    with pytest.raises(InputError, match="source"):
+        pl.gbuf.enable_edge_enhancement(source="gpu")
+    with pytest.raises(InputError, match="supersample"):
+        pl.gbuf.enable_edge_enhancement(source="frame", supersample=2)
     pl.close()
