@@ -46,6 +46,8 @@ _ROWS = 32
 # Cosines at least this far above cos(threshold) are angles certainly below the threshold
 # (far beyond acos round-off), so their ink is 0 without evaluating acos.
 _COS_MARGIN = 1e-9
+# Pairs per block of the scan for jumps above the threshold (:func:`_kind_row`).
+_SCAN = 64
 
 
 @njit(inline="always", cache=True)
@@ -633,7 +635,21 @@ def _kind_row(Sx, Sy, Sm, Sp, Vx, Vy, Vm, Vp, Dx, Dy, n, parallel, inv_d, jump, 
         scale = 1.0 if parallel else min(Dx[i], Dy[i]) * inv_d
         gap[i] = g * scale if (ok & (g > 0.0)) else 0.0
         pj[i] = 1.0 if vx != vy else 0.0
-    for i in range(n):
+    # Blocks without such a pair (almost all) are passed over after one vectorised test:
+    # a scalar test of every pair costs more than the first loop.
+    for b0 in range(0, n, _SCAN):
+        b1 = min(n, b0 + _SCAN)
+        hit = False
+        for i in range(b0, b1):
+            hit |= gap[i] > jump  # (NaN: no hit, as in the test below)
+        if hit:
+            _kind_hits(Sx, Sy, Sm, Sp, Dx, Dy, b0, b1, parallel, inv_d, jump, gap, pj)
+
+
+@njit(cache=True, error_model="numpy")
+def _kind_hits(Sx, Sy, Sm, Sp, Dx, Dy, b0, b1, parallel, inv_d, jump, gap, pj):
+    """The second loop of :func:`_kind_row` over pairs ``[b0, b1)``."""
+    for i in range(b0, b1):
         if not gap[i] > jump:
             continue
         x = Sx[i]
@@ -914,6 +930,39 @@ def _best_crease(
     return best
 
 
+@njit(cache=True)
+def _crease_row(
+    sz, depth, normal, m, r, a, n, cand, prof, may_h, may_v, h, w, parallel, inv_d, inv_w,
+    jump, crease, soft, cos_min, cos_skip, two, crease2, soft2, cos_min2, cos_skip2,
+    cre_row, cre_row2,
+):  # fmt: skip
+    """The exact crease ink of the candidate pixels of row ``r`` (``cand[i] != 0``), at one
+    or two angles (:func:`_best_crease`). Candidates are few: blocks without one are passed
+    over after one vectorised test (a scalar test of every pixel costs more)."""
+    for b0 in range(0, n, _SCAN):
+        b1 = min(n, b0 + _SCAN)
+        hit = False
+        for i in range(b0, b1):
+            hit |= cand[i] != 0
+        if not hit:
+            continue
+        for i in range(b0, b1):
+            if cand[i] == 0:
+                continue
+            c = a + i
+            if prof[i] >= 1.0:
+                continue  # a full profile pixel carries no crease ink
+            cre_row[i] = _best_crease(
+                sz, depth, normal, m, r, c, cand[i], may_h[i], may_v[i], h, w,
+                parallel, inv_d, inv_w, jump, crease, soft, cos_min, cos_skip,
+            )  # fmt: skip
+            if two:
+                cre_row2[i] = _best_crease(
+                    sz, depth, normal, m, r, c, cand[i], may_h[i], may_v[i], h, w,
+                    parallel, inv_d, inv_w, jump, crease2, soft2, cos_min2, cos_skip2,
+                )  # fmt: skip
+
+
 @njit(parallel=True, cache=True)
 def edge_pass(
     sz,
@@ -1136,21 +1185,11 @@ def edge_pass(
                 cre_row[i] = 0.0
                 cre_row2[i] = 0.0
             if do_crease:
-                for i in range(n):
-                    if cand[i] == 0:
-                        continue
-                    c = a + i
-                    if prof[i] >= 1.0:
-                        continue  # a full profile pixel carries no crease ink
-                    cre_row[i] = _best_crease(
-                        sz, depth, normal, m, r, c, cand[i], may_h[i], may_v[i], h, w,
-                        parallel, inv_d, inv_w, jump, crease, soft, cos_min, cos_skip,
-                    )  # fmt: skip
-                    if two:
-                        cre_row2[i] = _best_crease(
-                            sz, depth, normal, m, r, c, cand[i], may_h[i], may_v[i], h, w,
-                            parallel, inv_d, inv_w, jump, crease2, soft2, cos_min2, cos_skip2,
-                        )  # fmt: skip
+                _crease_row(
+                    sz, depth, normal, m, r, a, n, cand, prof, may_h, may_v, h, w, parallel,
+                    inv_d, inv_w, jump, crease, soft, cos_min, cos_skip, two, crease2, soft2,
+                    cos_min2, cos_skip2, cre_row, cre_row2,
+                )  # fmt: skip
             if mode == MODE_PAIRS:
                 _store_row(prof, cre_row, n, out_a[r, a:], out_b[r, a:])
                 if two:
