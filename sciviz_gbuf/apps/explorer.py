@@ -266,7 +266,7 @@ def load_scene(path: str | os.PathLike | None) -> tuple[pv.DataSet, str]:
     data, kind = read_scene(p)
     if kind == "patches":  # a Bezier patch set is explored as its tessellated surface
         return data.to_mesh(), "mesh"
-    if kind == "dicom":
+    if kind in ("dicom", "volume"):  # a CT volume is explored as its bone surface
         return ct_surface(data), "dicom"
     if kind == "dem":
         return _dem_surface(data), "dem"

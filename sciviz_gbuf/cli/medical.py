@@ -6,8 +6,8 @@ import argparse
 import time
 
 from ..compose import write_png
-from ..readers.dicom import dicom_report, read_dicom_series
-from ..recipes.medical import LAYOUTS, VIEWS, ct_enhance, ct_gbuffer
+from ..readers.dicom import dicom_report
+from ..recipes.medical import LAYOUTS, VIEWS, ct_enhance, ct_gbuffer, read_ct_volume
 from ._args import add_progress, number, png_output, positive_int, show_progress, size
 
 __all__ = ["add_ct"]
@@ -62,10 +62,13 @@ def _cmd_ct(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     show = show_progress(args)
     source = args.dicom[0] if len(args.dicom) == 1 else list(args.dicom)
-    volume = read_dicom_series(
+    volume = read_ct_volume(
         source, series_uid=args.series, resample=args.resample, progress_bar=show
     )
-    report = dicom_report(volume)
+    if "dicom_report" in volume.field_data:
+        report = dicom_report(volume)
+    else:  # a volume file
+        report = {"n_slices": volume.dimensions[2], "geometry": "volume file"}
     t1 = time.perf_counter()
     gb = ct_gbuffer(
         volume,
@@ -108,12 +111,19 @@ def add_ct(sub) -> None:
     """Add the ``ct`` sub-command to the ``sciviz-gbuf`` parser."""
     p = sub.add_parser(
         "ct",
-        help="enhanced CT bone/skin surface from a DICOM series (Saito & Takahashi 1990 Fig. 14)",
-        description="Read a DICOM CT series (ordered by patient position, rescaled to HU), cut "
+        help="enhanced CT bone/skin surface from a DICOM series or a NRRD/MetaImage/NIfTI "
+        "volume (Saito & Takahashi 1990 Fig. 14)",
+        description="Read a DICOM CT series (ordered by patient position, rescaled to HU) or a "
+        "volume file (NRRD, MetaImage, NIfTI; in the same patient frame), cut "
         "an isosurface, render it once, then draw profiles, shading, contour lines of one "
         "world coordinate and colour bands of another beside the conventional shaded image.",
     )
-    p.add_argument("dicom", nargs="+", help="DICOM series folder, or the files of one series")
+    p.add_argument(
+        "dicom",
+        nargs="+",
+        help="DICOM series folder, or the files of one series, or one volume file (.nrrd, "
+        ".nhdr, .mha, .mhd, .nii, .nii.gz)",
+    )
     p.add_argument("-o", "--output", required=True, help="output image (.png)")
     p.add_argument(
         "--iso", type=_iso, default="bone", help="threshold in HU, or bone (300) / skin (-500)"

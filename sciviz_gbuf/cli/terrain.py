@@ -164,8 +164,10 @@ def _size_options(args: argparse.Namespace) -> dict:
     return opts
 
 
-def _read_terrain(source: str | None):
-    return load_jacksboro_dem() if source is None else read_dem(source)
+def _read_terrain(source, geographic: bool | None = None):
+    if source is None:
+        return load_jacksboro_dem()
+    return read_dem(source, geographic=geographic)
 
 
 def _contour_options(spec) -> dict:
@@ -261,7 +263,7 @@ def _cmd_topo(args: argparse.Namespace) -> int:
     if args.chunks is not None or args.dask is not None:
         return _topo_out_of_core(args, source, out, show, t0)
     with progress(show, 2 + (args.geotiff is not None), "topo") as bar:
-        dem = _read_terrain(source)
+        dem = _read_terrain(source, args.geographic)
         bar.step("map")
         rgba = topographic_map(dem, **_topo_options(args, show))
         bar.step("write")
@@ -286,7 +288,7 @@ def _topo_out_of_core(args: argparse.Namespace, source, out: Path, show: bool, t
     if source is None:
         raise InputError("dem: out of core (--chunks/--dask) needs DEM file(s) to read")
     # Read (metadata only) before a cluster starts: a bad file fails fast.
-    dem = read_dem(source, chunks=args.chunks or 2048)
+    dem = read_dem(source, chunks=args.chunks or 2048, geographic=args.geographic)
     block = tuple(int(v) for v in dem.heights.chunksize)
     client = None
     if args.dask == "local":
@@ -350,7 +352,7 @@ def _cmd_birdseye(args: argparse.Namespace) -> int:
     out = png_output(args.output)
     t0 = time.perf_counter()
     show = show_progress(args)
-    dem = _read_terrain(args.dem)
+    dem = _read_terrain(args.dem, args.geographic)
     gb = birdseye_gbuffer(
         dem,
         view_azimuth=args.view_azimuth,
@@ -399,6 +401,23 @@ def _add_z_factor(p: argparse.ArgumentParser, what: str, ground: str) -> None:
 def _add_map_style(p: argparse.ArgumentParser, *, tiles: bool = False) -> None:
     """Options shared by the plan-view and bird's-eye maps; ``tiles``: several DEM files (one
     mosaic) and a .png or .tif output."""
+    grid = p.add_mutually_exclusive_group()
+    grid.add_argument(
+        "--geographic",
+        dest="geographic",
+        action="store_const",
+        const=True,
+        default=None,
+        help="the grid's coordinates are longitude/latitude degrees (default: from its CRS, "
+        "or, without one, by whether its cells look like degrees)",
+    )
+    grid.add_argument(
+        "--projected",
+        dest="geographic",
+        action="store_const",
+        const=False,
+        help="the grid's coordinates are metres (or the CRS's unit), not degrees",
+    )
     p.add_argument(
         "dem",
         nargs="*" if tiles else "?",

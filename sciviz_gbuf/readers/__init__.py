@@ -1,4 +1,5 @@
-"""Readers: mesh files -> PyVista datasets; DEM grids -> DEM; DICOM; Bezier patch sets.
+"""Readers: mesh files -> PyVista datasets; DEM grids -> DEM; DICOM and volume files (NRRD,
+MetaImage, NIfTI) -> patient-space volumes; Bezier patch sets.
 
 :data:`~sciviz_gbuf.readers.formats.FORMATS` is the one suffix table; :func:`read_scene` reads
 any path by it.
@@ -7,16 +8,18 @@ any path by it.
 from ._dem_model import metres_per_degree
 from .dem import DEM, read_dem
 from .dicom import dicom_report, read_dicom_series
-from .formats import FORMATS, KINDS, UP_AXES, Format, kind_of, suffixes, up_axis
+from .formats import FORMATS, KINDS, UP_AXES, Format, kind_of, suffix_of, suffixes, up_axis
 from .mesh import read_mesh
 from .patches import PatchSet, read_patches
 from .read import read_scene
+from .volume import VOLUME_SUFFIXES, read_volume
 
 __all__ = [
     "DEM",
     "FORMATS",
     "KINDS",
     "UP_AXES",
+    "VOLUME_SUFFIXES",
     "Format",
     "PatchSet",
     "dicom_report",
@@ -27,6 +30,8 @@ __all__ = [
     "read_mesh",
     "read_patches",
     "read_scene",
+    "read_volume",
+    "suffix_of",
     "suffixes",
     "up_axis",
 ]

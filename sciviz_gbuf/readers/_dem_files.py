@@ -340,14 +340,24 @@ def read_geotiff(path: Path) -> RawDEM:
 
 #: vtkDEMReader's own feet-to-metres factor (VTK_METERS_PER_FEET); the international foot is
 #: 0.3048 m, so its heights in feet are rescaled by 0.3048 / 0.305.
-VTK_METRES_PER_FOOT = 0.305
 METRES_PER_FOOT = 0.3048
-#: Type A record fields (byte offset, width) as vtkDEMReader's sscanf calls read them.
+#: The USGS DEM's elevation of a void post (no data).
+USGS_VOID = -32767
+
 _A_FIELDS = {
+    "system": (156, 12),  # ground reference system (0 geographic, 1 UTM, 2 state plane), zone
     "units": (528, 18),  # ground (plane) unit, elevation unit, polygon sides, 3 x 6
     "corners": (546, 192),  # SW, NW, NE, SE (x, y), 8 x 24
     "resolution": (816, 36),  # x, y, z, 3 x 12
     "profiles": (852, 12),  # rows, columns, 2 x 6
+}
+#: Horizontal datum code (type A record, bytes 891-892 of the 1992 format) -> (name, EPSG of
+#: its geographic CRS, EPSG of UTM zone 1 north, of zone 1 south, last UTM zone in EPSG).
+_DATUMS = {
+    1: ("NAD27", 4267, 26701, None, 22),
+    2: ("WGS72", 4322, 32201, 32301, 60),
+    3: ("WGS84", 4326, 32601, 32701, 60),
+    4: ("NAD83", 4269, 26901, None, 23),
 }
 #: One ``%6d`` of C's fscanf: skip white space, then at most 6 characters of sign and digits.
 _INT6 = re.compile(rb"[ \t\r\n\v\f]*([+-]\d{1,5}|\d{1,6})")
@@ -365,14 +375,20 @@ def _a_numbers(record: bytes, key: str, width: int, path: Path) -> list[float]:
         ) from exc
 
 
-def _profile_extents(data: bytes, n_profiles: int, path: Path) -> list[tuple[int, int, list[int]]]:
-    """``(row0, column, elevations)`` of each type B record, scanned as vtkDEMReader reads it.
+@dataclass(frozen=True)
+class _Profile:
+    """One type B record: the ground coordinates of its first post, its local datum elevation
+    and its elevations (integers in units of the z resolution)."""
 
-    vtkDEMReader writes each profile's samples at ``row0 + k`` without checking them against its
-    grid (a bad row id writes out of bounds), and it reports a truncated file only on its output
-    window. So the records are walked here first, with its own fscanf rules: four ``%6d``, 120
-    raw characters, then ``count`` more ``%6d``.
-    """
+    x: float
+    y: float
+    datum: float
+    elevations: np.ndarray
+
+
+def _profiles(data: bytes, n_profiles: int, path: Path) -> list[_Profile]:
+    """Every type B record: four ``%6d`` (row and column ids, count, 1), five D24.15 (x, y of
+    the first post, local datum elevation, min, max), then ``count`` ``%6d`` elevations."""
     pos, out = 1024, []
     for p in range(n_profiles):
         head = []
@@ -383,7 +399,6 @@ def _profile_extents(data: bytes, n_profiles: int, path: Path) -> list[tuple[int
             head.append(int(m[1]))
             pos = m.end()
         if not head and not data[pos:].strip():
-            # vtkDEMReader stops quietly here and leaves the missing columns filled.
             raise InputError(
                 f"{path}: USGS DEM header says {n_profiles} profiles, the file ends after {p} "
                 "(truncated?)"
@@ -393,9 +408,19 @@ def _profile_extents(data: bytes, n_profiles: int, path: Path) -> list[tuple[int
                 f"{path}: USGS DEM profile {p + 1} of {n_profiles}: truncated or garbled type B "
                 f"record header at byte {pos}"
             )
-        pos += 120  # x, y of the first sample, datum elevation, min, max (not needed here)
-        row_id, column_id, count, _ = head
-        elevations = []
+        text = data[pos : pos + 120].decode("latin-1").upper().replace("D", "E")
+        try:
+            x, y, datum = (float(text[i : i + 24]) for i in (0, 24, 48))
+        except ValueError:
+            raise InputError(
+                f"{path}: USGS DEM profile {p + 1}: the first post's coordinates and datum "
+                f"elevation at byte {pos} are not numbers ({text[:72].strip()!r})"
+            ) from None
+        pos += 120
+        _, column_id, count, _ = head
+        if not 0 <= count <= len(data):  # an elevation takes at least one byte
+            raise InputError(f"{path}: USGS DEM profile {p + 1}: {count} elevations")
+        elevations = np.empty(count, dtype=np.int64)
         for k in range(count):
             m = _INT6.match(data, pos)
             if m is None:
@@ -403,24 +428,44 @@ def _profile_extents(data: bytes, n_profiles: int, path: Path) -> list[tuple[int
                     f"{path}: USGS DEM profile {p + 1} (column {column_id}): expected {count} "
                     f"elevations, elevation {k + 1} at byte {pos} is missing or not an integer"
                 )
-            elevations.append(int(m[1]))
+            elevations[k] = int(m[1])
             pos = m.end()
-        out.append((row_id - 1, column_id - 1, elevations))
+        out.append(_Profile(x, y, datum, elevations))
     return out
 
 
-def read_usgs_dem(path: Path) -> RawDEM:
-    """USGS ASCII DEM (``.dem``) through VTK's ``vtkDEMReader``, heights in metres.
+def _usgs_crs(record: bytes, path: Path) -> str | None:
+    """The CRS the type A record names, as ``"EPSG:n"``: geographic or UTM (negative zone:
+    south) on its horizontal datum (blank: NAD27, as in the files before 1992 and as GDAL
+    reads them); None for state plane, local systems and unknown codes."""
+    system, zone = (int(v) for v in _a_numbers(record, "system", 6, path))
+    text = record[890:892].decode("latin-1").strip()
+    code = int(text) if text.isdigit() else 1
+    if code not in _DATUMS:
+        return None
+    _, geographic, north, south, last = _DATUMS[code]
+    if system == 0:
+        return f"EPSG:{geographic}"
+    if system == 1 and 1 <= abs(zone) <= last:
+        if zone > 0:
+            return f"EPSG:{north + zone - 1}"
+        return f"EPSG:{south - zone - 1}" if south is not None else None
+    return None
 
-    The Type A record is checked here and every Type B record header is scanned (see
-    :func:`_profile_extents`) before VTK reads the file: the reader fills the cells outside the
-    profiles with the header's minimum elevation, a real height, so the nodata mask comes from
-    the profile extents instead. VTK's image has its row 0 in the south (profiles run south to
-    north) and its origin at the south-west sample; ground coordinates in arc-seconds or radians
-    become degrees (a geographic grid), feet stay feet with :attr:`RawDEM.unit_metres` 0.3048.
-    VTK converts feet of elevation with 0.305 m; that is rescaled to the international foot.
-    Grids narrower than 100 columns take the scanned values instead: vtkDEMReader would divide
-    by zero there (SIGFPE, killing the interpreter).
+
+def read_usgs_dem(path: Path) -> RawDEM:
+    """USGS ASCII DEM (``.dem``), heights in metres, parsed here (not by ``vtkDEMReader``).
+
+    Each profile (type B record) is placed by the ground coordinates of its first post, as the
+    format defines it: in the 7.5-minute quads every profile has row id 1 but starts at its
+    own northing, because the quad's edges are not grid lines. vtkDEMReader places them by the
+    ids (every profile from the south edge, the rest of each column filled with the minimum
+    elevation) and drops each profile's local datum elevation: wrong heights along the quad's
+    edges. Here a height is ``(datum + e * z_resolution) * unit``, and void posts (-32767)
+    are nodata. The grid is the posts' own: x of the westmost profile, y of the southmost
+    first post, steps of the resolution. Ground coordinates in arc-seconds or radians become
+    degrees; a grid in feet stays in feet with :attr:`RawDEM.unit_metres` 0.3048. The CRS
+    comes from the header's reference system, zone and horizontal datum (:func:`_usgs_crs`).
     """
     data = path.read_bytes()
     if len(data) < 1024:
@@ -429,84 +474,43 @@ def read_usgs_dem(path: Path) -> RawDEM:
         )
     record = data[:1024]
     plane_unit, elevation_unit, _ = _a_numbers(record, "units", 6, path)
-    corners = np.reshape(_a_numbers(record, "corners", 24, path), (4, 2))
     res_x, res_y, res_z = _a_numbers(record, "resolution", 12, path)
     _, n_profiles = (int(v) for v in _a_numbers(record, "profiles", 6, path))
-    if not (res_x > 0 and res_y > 0 and res_z > 0 and n_profiles > 0):
+    if not (res_x > 0 and res_y > 0 and res_z > 0 and 0 < n_profiles <= len(data) // 6):
         raise InputError(
             f"{path}: not a USGS ASCII DEM: spatial resolution {res_x:g}, {res_y:g}, {res_z:g} "
-            f"and {n_profiles} profiles must be positive"
+            f"and {n_profiles} profiles must be positive (and fit in the file)"
         )
     if plane_unit not in (0, 1, 2, 3) or elevation_unit not in (1, 2):
         raise InputError(
             f"{path}: USGS DEM ground unit code {plane_unit:g} (expected 0-3) or elevation unit "
             f"code {elevation_unit:g} (expected 1 feet, 2 metres) not understood"
         )
-    # vtkDEMReader's grid: the corners' bounding box in steps of the resolution (float32 sums).
-    west, east = corners[:2, 0].min(), corners[2:, 0].max()
-    south, north = corners[[0, 3], 1].min(), corners[1:3, 1].max()
-    ncols = int(np.float32(east - west) / np.float32(res_x) + 1.0)
-    nrows = int(np.float32(north - south) / np.float32(res_y) + 1.0)
-    extents = _profile_extents(data, n_profiles, path)
-    mask = np.zeros((nrows, ncols), dtype=bool)  # VTK order: row 0 south
-    scanned = np.zeros((nrows, ncols))
-    for row0, column, elevations in extents:
-        count = len(elevations)
-        if not (0 <= column < ncols and row0 >= 0 and row0 + count <= nrows):
-            raise InputError(
-                f"{path}: USGS DEM profile at column {column + 1}, rows {row0 + 1}-"
-                f"{row0 + count} lies outside the {nrows} x {ncols} grid of its corners"
-            )
-        mask[row0 : row0 + count, column] = True
-        scanned[row0 : row0 + count, column] = elevations
-    if ncols < 100:
-        # vtkDEMReader divides by ncols // 100 (its progress interval): SIGFPE, the whole
-        # process dies. Narrow grids use the scanned values, scaled as VTK would.
-        values = scanned * res_z * (METRES_PER_FOOT if elevation_unit == 1 else 1.0)
-    else:
-        values = _vtk_dem_values(path, nrows, ncols)
-        if elevation_unit == 1:
-            values *= METRES_PER_FOOT / VTK_METRES_PER_FOOT
-    heights = np.where(mask, values, np.nan)[::-1].astype(np.float32)  # north row first
-    x_sw, y_sw = corners[0]  # the south-west sample (VTK's image origin), in ground units
-
+    profiles = _profiles(data, n_profiles, path)
+    xs = np.array([pr.x for pr in profiles])
+    ys = np.array([pr.y for pr in profiles])
+    if not (np.isfinite(xs).all() and np.isfinite(ys).all()):
+        raise InputError(f"{path}: USGS DEM profile coordinates are not finite")
+    west, south = float(xs.min()), float(ys.min())
+    columns = np.rint((xs - west) / res_x).astype(np.int64)
+    rows0 = np.rint((ys - south) / res_y).astype(np.int64)
+    counts = np.array([pr.elevations.size for pr in profiles], dtype=np.int64)
+    ncols = int(columns.max()) + 1
+    nrows = max(int((rows0 + counts).max()), 1)
+    if ncols * nrows > MAX_CELLS or np.unique(columns).size != len(profiles):
+        raise InputError(
+            f"{path}: USGS DEM profiles do not form a grid ({len(profiles)} profiles over "
+            f"{ncols} columns of {res_x:g} and {nrows} rows of {res_y:g} ground units)"
+        )
+    unit = METRES_PER_FOOT if elevation_unit == 1 else 1.0
+    heights = np.full((nrows, ncols), np.nan, dtype=np.float64)  # row 0 south here
+    for pr, column, row0 in zip(profiles, columns, rows0, strict=True):
+        e = pr.elevations
+        z = (pr.datum + e * res_z) * unit
+        heights[row0 : row0 + e.size, column] = np.where(e == USGS_VOID, np.nan, z)
+    heights = heights[::-1].astype(np.float32)  # north row first
     to_crs = {0: 180 / np.pi, 3: 1 / 3600}.get(int(plane_unit), 1.0)  # radians, arc-s -> deg
     dx, dy = res_x * to_crs, res_y * to_crs
-    transform = (x_sw * to_crs - dx / 2, dx, 0.0, y_sw * to_crs + (nrows - 0.5) * dy, 0.0, -dy)
-    # No CRS: the zone and datum (NAD27, NAD83, ...) are not read, and guessing one is worse.
-    unit = METRES_PER_FOOT if plane_unit == 1 else 1.0
-    return RawDEM(heights, transform, None, plane_unit in (0, 3), unit)
-
-
-def _vtk_dem_values(path: Path, nrows: int, ncols: int) -> np.ndarray:
-    """vtkDEMReader's image as float64 (nrows, ncols), row 0 south; its errors -> InputError."""
-    from vtkmodules.util.misc import calldata_type
-    from vtkmodules.util.numpy_support import vtk_to_numpy
-    from vtkmodules.util.vtkConstants import VTK_STRING
-    from vtkmodules.vtkCommonCore import vtkCommand
-    from vtkmodules.vtkIOImage import vtkDEMReader
-
-    reader = vtkDEMReader()
-    errors: list[str] = []
-
-    # Observers take the errors off VTK's output window (stderr) and pass them on here.
-    @calldata_type(VTK_STRING)
-    def on_error(_obj, _event, message: str) -> None:
-        # "ERROR: In vtkDEMReader.cxx, line n\nvtkDEMReader (0x..): text": keep the text
-        errors.append(str(message).strip().splitlines()[-1].split("): ", 1)[-1])
-
-    reader.AddObserver(vtkCommand.ErrorEvent, on_error)
-    reader.GetExecutive().AddObserver(vtkCommand.ErrorEvent, on_error)
-    try:
-        reader.SetFileName(str(path))
-    except UnicodeError as exc:  # VTK takes UTF-8 file names only
-        raise InputError(
-            f"{path}: VTK cannot open a file whose name is not UTF-8: rename it"
-        ) from exc
-    reader.Update()
-    image = reader.GetOutput()
-    scalars = image.GetPointData().GetScalars()
-    if errors or scalars is None or tuple(image.GetDimensions()[:2]) != (ncols, nrows):
-        detail = "; ".join(dict.fromkeys(errors)) or f"output dimensions {image.GetDimensions()}"
-        raise InputError(f"{path}: vtkDEMReader could not read this USGS DEM ({detail})")
-    return vtk_to_numpy(scalars).reshape(nrows, ncols).astype(np.float64)
+    transform = (west * to_crs - dx / 2, dx, 0.0, south * to_crs + (nrows - 0.5) * dy, 0.0, -dy)
+    plane_metres = METRES_PER_FOOT if plane_unit == 1 else 1.0
+    return RawDEM(heights, transform, _usgs_crs(record, path), plane_unit in (0, 3), plane_metres)

@@ -342,7 +342,8 @@ def georeference(
                 warnings.warn(
                     f"{name or 'array'}: no CRS, and cells of {transform[1]:g} x "
                     f"{abs(transform[5]):g} units within longitude/latitude range: taken as "
-                    "degrees (pass geographic=False if they are metres)",
+                    "degrees (if they are metres: geographic=False, or --projected on the "
+                    "command line)",
                     UserWarning,
                     stacklevel=stacklevel,
                 )

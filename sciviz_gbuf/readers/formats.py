@@ -29,10 +29,20 @@ from ._dem_files import (
     read_usgs_dem,
 )
 
-__all__ = ["FORMATS", "KINDS", "UP_AXES", "Format", "kind_of", "suffixes", "up_axis"]
+__all__ = [
+    "FORMATS",
+    "KINDS",
+    "UP_AXES",
+    "Format",
+    "kind_of",
+    "suffix_of",
+    "suffixes",
+    "up_axis",
+]
 
-#: What a path can hold: a DEM grid, a surface/volume mesh, Bezier patches, a DICOM series.
-KINDS = ("dem", "mesh", "patches", "dicom")
+#: What a path can hold: a DEM grid, a surface/volume mesh, Bezier patches, a DICOM series, a
+#: volume image file (NRRD, MetaImage, NIfTI).
+KINDS = ("dem", "mesh", "patches", "dicom", "volume")
 #: The world axes a file's convention can make upright.
 UP_AXES = ("x", "y", "z")
 
@@ -84,6 +94,13 @@ FORMATS: dict[str, Format] = {
     ".off": Format("mesh", "Object File Format", up="y"),
     ".gltf": Format("mesh", "glTF scene", up="y"),
     ".glb": Format("mesh", "binary glTF scene", up="y"),
+    # Volume images (readers/volume.py), in patient coordinates like DICOM: z-up.
+    ".nrrd": Format("volume", "NRRD volume"),
+    ".nhdr": Format("volume", "NRRD header (detached data)"),
+    ".mha": Format("volume", "MetaImage volume"),
+    ".mhd": Format("volume", "MetaImage header (detached data)"),
+    ".nii": Format("volume", "NIfTI volume"),
+    ".nii.gz": Format("volume", "gzipped NIfTI volume"),
 }
 
 
@@ -98,8 +115,18 @@ def kind_of(path: str | os.PathLike) -> str:
     p = Path(path)
     if p.is_dir():
         return "dicom"
-    fmt = FORMATS.get(p.suffix.lower())
+    fmt = FORMATS.get(suffix_of(p))
     return fmt.kind if fmt is not None else "mesh"
+
+
+def suffix_of(path: str | os.PathLike) -> str:
+    """The suffix :data:`FORMATS` knows ``path`` by: the last one, lower case, or a listed
+    double suffix (``.nii.gz``) whole."""
+    name = Path(path).name.lower()
+    for double in (s for s in FORMATS if s.count(".") > 1):
+        if name.endswith(double):
+            return double
+    return Path(name).suffix
 
 
 def up_axis(path: str | os.PathLike | None) -> str:
@@ -108,5 +135,5 @@ def up_axis(path: str | os.PathLike | None) -> str:
     Bezier patches, a DICOM folder, unlisted suffixes, and no path at all)."""
     if path is None:
         return "z"
-    fmt = FORMATS.get(Path(path).suffix.lower())
+    fmt = FORMATS.get(suffix_of(path))
     return fmt.up if fmt is not None else "z"

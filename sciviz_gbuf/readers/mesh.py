@@ -26,6 +26,7 @@ from ._mesh_check import (
     read_isolated,
     vtk_messages,
 )
+from .formats import kind_of
 
 __all__ = ["SOURCE_ARRAY", "check_mesh", "quiet_vtk", "read_mesh", "source_name"]
 
@@ -91,6 +92,12 @@ def read_mesh(path: str | os.PathLike) -> pv.DataSet:
     p = Path(path)
     if not p.is_file():
         raise InputError(f"{shown}: no such mesh file")
+    if kind_of(p) == "volume":
+        # VTK would read it as an image whose outer box is all a capture draws
+        raise InputError(
+            f"{shown}: is a volume image, not a mesh: `sciviz-gbuf ct {shown}` draws its "
+            "isosurface (in Python: read_volume and core.isosurface)"
+        )
     check_file(p, shown)
     if p.suffix.lower() in CHECKED_SUFFIXES:
         with vtk_messages() as msgs:

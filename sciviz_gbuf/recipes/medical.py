@@ -29,6 +29,7 @@ from ..core.gbuffer import GBuffer
 from ..core.isosurface import isosurface
 from ..errors import InputError
 from ..filters import color_bands, contour_lines, lambert, profile_edges
+from ..readers import kind_of, read_volume
 from ..readers.dicom import read_dicom_series
 from ..styles import LIGHT
 from ._intervals import round_up
@@ -42,6 +43,7 @@ __all__ = [
     "ct_layers",
     "ct_panels",
     "ct_surface",
+    "read_ct_volume",
     "view_camera",
 ]
 
@@ -160,13 +162,13 @@ def ct_surface(
     if isinstance(source, pv.DataSet):
         volume = source
     elif isinstance(source, (str, os.PathLike, list, tuple)):
-        volume = read_dicom_series(
+        volume = read_ct_volume(
             source, series_uid=series_uid, resample=resample, progress_bar=progress_bar
         )
     else:
         raise InputError(
-            "source: expected a DICOM folder or file list, a PyVista volume or a surface, "
-            f"got {type(source).__name__}"
+            "source: expected a DICOM folder or file list, a volume file (NRRD, MetaImage, "
+            f"NIfTI), a PyVista volume or a surface, got {type(source).__name__}"
         )
     return isosurface(
         volume,
@@ -177,6 +179,27 @@ def ct_surface(
         largest=largest,
         refine=refine,
         progress_bar=progress_bar,
+    )
+
+
+def read_ct_volume(
+    source: str | os.PathLike | Sequence[str | os.PathLike],
+    *,
+    series_uid: str | None = None,
+    resample: bool = False,
+    progress_bar: bool = False,
+) -> pv.DataSet:
+    """The CT volume of ``source``: one volume file (``.nrrd``, ``.nhdr``, ``.mha``, ``.mhd``,
+    ``.nii``, ``.nii.gz``: :func:`~sciviz_gbuf.readers.read_volume`), else a DICOM folder,
+    file or file list (:func:`~sciviz_gbuf.readers.read_dicom_series`, which takes
+    ``series_uid`` and ``resample``). Both give point array ``"HU"`` in LPS millimetres."""
+    single = source if isinstance(source, (str, os.PathLike)) else None
+    if isinstance(source, (list, tuple)) and len(source) == 1:
+        single = source[0]
+    if single is not None and kind_of(single) == "volume":
+        return read_volume(single)
+    return read_dicom_series(
+        source, series_uid=series_uid, resample=resample, progress_bar=progress_bar
     )
 
 

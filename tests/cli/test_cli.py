@@ -195,3 +195,32 @@ def test_edges_bad_files_exit_2(tmp_path, capsys):
     assert main(["edges", str(mesh), "-o", out, *too_big]) == 2
     assert "supersample" in capsys.readouterr().err
     assert not (tmp_path / "x.png").exists()
+
+
+def test_topo_geographic_and_projected_flags(tmp_path, capsys):
+    """A grid without a CRS whose cells look like degrees: taken as degrees with one warning
+    line naming the CLI's own switch; --geographic / --projected decide without a warning,
+    and metres give another relief than degrees (cells 1000x smaller)."""
+    y, x = np.mgrid[0:40, 0:50]
+    z = 1500 + 40 * np.sin(x / 6.0) * np.cos(y / 7.0)
+    asc = tmp_path / "deg.asc"
+    body = "\n".join(" ".join(f"{v:.2f}" for v in row) for row in z)
+    asc.write_text(
+        "ncols 50\nnrows 40\nxllcorner -105.5\nyllcorner 40.1\ncellsize 0.000833333\n"
+        f"NODATA_value -9999\n{body}\n"
+    )
+    outs = {}
+    for flag in (None, "--geographic", "--projected"):
+        out = tmp_path / f"{flag or 'auto'}.png"
+        assert main(["topo", str(asc), "-o", str(out), *([flag] if flag else [])]) == 0
+        err = capsys.readouterr().err
+        lines = [ln for ln in err.splitlines() if ln.strip()]
+        if flag is None:
+            assert len(lines) == 1 and "warning" in lines[0] and "--projected" in lines[0]
+        else:
+            assert lines == [], err
+        outs[flag] = np.asarray(Image.open(out))
+    np.testing.assert_array_equal(outs[None], outs["--geographic"])
+    assert not np.array_equal(outs["--geographic"], outs["--projected"])
+    with pytest.raises(SystemExit):
+        main(["topo", str(asc), "-o", str(tmp_path / "x.png"), "--geographic", "--projected"])

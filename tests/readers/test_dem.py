@@ -345,6 +345,11 @@ def write_usgs_dem(
     res=(30.0, 30.0, 0.5),
     plane_unit: int = 2,
     elevation_unit: int = 2,
+    ground_system: int = 1,
+    zone: int = 13,
+    datum_code: int | None = None,
+    row_ids_one: bool = False,
+    datum_elevations=None,
 ) -> None:
     """A USGS ASCII DEM written by hand from the format's fixed columns (no package code).
 
@@ -356,6 +361,10 @@ def write_usgs_dem(
     accuracy (I6), x/y/z resolution (3 x E12.6), rows and columns of profiles (2 x I6).
     Each type B record: row, column, number of elevations, 1 (4 x I6), x and y of the first
     sample, datum elevation, min and max (5 x D24.15), then the elevations (I6), padded to 1024.
+    ``datum_code`` goes to bytes 891-892 (the 1992 format's horizontal datum); ``row_ids_one``
+    writes row id 1 in every profile, as the 7.5-minute quads do (the start is in y alone);
+    ``datum_elevations[c]`` is profile c's local datum elevation (the file's elevations are
+    then ``elev - datum / dz``).
     """
     nrows, ncols = elev.shape
     dx, dy, dz = res
@@ -363,20 +372,24 @@ def write_usgs_dem(
     inside = np.concatenate(
         [elev[s : s + n, c] for c, (s, n) in enumerate(zip(starts, counts, strict=True))]
     )
-    a = f"{'SYNTHETIC TEST DEM':<144}{1:6d}{1:6d}{1:6d}{13:6d}" + _d24(0.0) * 15
+    a = f"{'SYNTHETIC TEST DEM':<144}{1:6d}{1:6d}{ground_system:6d}{zone:6d}" + _d24(0.0) * 15
     a += f"{plane_unit:6d}{elevation_unit:6d}{4:6d}"
     a += "".join(_d24(v) for v in (x0, y0, x0, yn, xe, yn, xe, y0))
     a += _d24(inside.min() * dz) + _d24(inside.max() * dz) + _d24(0.0) + f"{0:6d}"
     a += "".join(f"{v:12.6E}" for v in (dx, dy, dz)) + f"{1:6d}{ncols:6d}"
     assert len(a) == 864
+    if datum_code is not None:
+        a = f"{a:<890}{datum_code:2d}"
     records = [f"{a:<1024}"]
     for c, (s, n) in enumerate(zip(starts, counts, strict=True)):
         col = elev[s : s + n, c]
-        b = f"{s + 1:6d}{c + 1:6d}{n:6d}{1:6d}"
+        datum = 0.0 if datum_elevations is None else float(datum_elevations[c])
+        stored = np.where(col == -32767, col, col - round(datum / dz))
+        b = f"{1 if row_ids_one else s + 1:6d}{c + 1:6d}{n:6d}{1:6d}"
         b += "".join(
-            _d24(v) for v in (x0 + c * dx, y0 + s * dy, 0.0, col.min() * dz, col.max() * dz)
+            _d24(v) for v in (x0 + c * dx, y0 + s * dy, datum, col.min() * dz, col.max() * dz)
         )
-        b += "".join(f"{int(v):6d}" for v in col)
+        b += "".join(f"{int(v):6d}" for v in stored)
         records.append(b + " " * (-len(b) % 1024))
     path.write_text("".join(records))
 
@@ -410,26 +423,9 @@ def test_usgs_dem_ramps_orientation_fill_and_georeference(tmp_path, ncols):
     assert np.nanmean(np.diff(dem.heights, axis=0)) == pytest.approx(-3.5)  # down = south
     # corner transform: south-west sample at (500000, 4000000), 30 m cells
     assert dem.transform == (499985.0, 30.0, 0.0, 4000000 + 5.5 * 30, 0.0, -30.0)
-    assert dem.pixel_size == (30.0, 30.0) and not dem.geographic and dem.crs is None
+    # UTM zone 13 (the writer's header), no datum code: NAD27, as GDAL reads such files
+    assert dem.pixel_size == (30.0, 30.0) and not dem.geographic and dem.crs == "EPSG:26713"
     assert dem.source == str(path)
-
-
-def test_usgs_dem_vtk_fills_with_minimum_elevation(tmp_path):
-    """The VTK quirk the mask works around: outside the profiles it writes the header minimum."""
-    from vtkmodules.util.numpy_support import vtk_to_numpy
-    from vtkmodules.vtkIOImage import vtkDEMReader
-
-    elev, starts, counts, inside = ramp_dem(6, 120)
-    path = tmp_path / "ramp.dem"
-    write_usgs_dem(path, elev, starts, counts)
-    reader = vtkDEMReader()
-    reader.SetFileName(str(path))
-    reader.Update()
-    image = reader.GetOutput()
-    assert image.GetDimensions() == (120, 6, 1) and image.GetOrigin()[:2] == (500000, 4000000)
-    values = vtk_to_numpy(image.GetPointData().GetScalars()).reshape(6, 120)  # row 0 south
-    assert (values[~inside] == 100.0).all() and values[0, 0] == 100.0
-    np.testing.assert_array_equal(values[inside], 0.5 * elev[inside])
 
 
 def test_usgs_dem_feet_and_arc_seconds(tmp_path):
@@ -438,7 +434,7 @@ def test_usgs_dem_feet_and_arc_seconds(tmp_path):
     write_usgs_dem(feet, elev, starts, counts, res=(10.0, 10.0, 1.0), elevation_unit=1)
     dem = read_dem(feet)
     np.testing.assert_allclose(dem.heights[dem.mask], (0.3048 * elev[::-1])[inside[::-1]], 1e-6)
-    wide = tmp_path / "feet_wide.dem"  # the VTK path multiplies by 0.305: rescaled
+    wide = tmp_path / "feet_wide.dem"  # (vtkDEMReader multiplied by 0.305)
     elev_w, starts_w, counts_w, inside_w = ramp_dem(4, 100)
     write_usgs_dem(wide, elev_w, starts_w, counts_w, res=(10.0, 10.0, 1.0), elevation_unit=1)
     wide_dem = read_dem(wide)
@@ -483,22 +479,81 @@ def test_usgs_dem_truncated_and_garbage(tmp_path, ncols):
     garbage.write_text("hello world " * 200)
     with pytest.raises(InputError, match=r"garbage\.dem: not a USGS ASCII DEM"):
         read_dem(garbage)
-    # a profile reaching past the corners' grid (VTK would write out of bounds)
-    tall = tmp_path / "tall.dem"
-    write_usgs_dem(tall, elev, starts, counts)
-    tall.write_text(
-        tall.read_text().replace(f"{1:6d}{1:6d}{6:6d}{1:6d}", f"{2:6d}{1:6d}{6:6d}{1:6d}", 1)
-    )
-    with pytest.raises(InputError, match=r"tall\.dem: USGS DEM profile at column 1.*outside"):
-        read_dem(tall)
+    # two profiles at the same easting: no grid
+    twin = tmp_path / "twin.dem"
+    write_usgs_dem(twin, elev, starts, counts)
+    text = twin.read_text()
+    second = text[2048:3072].replace(_d24(500000.0 + 30.0), _d24(500000.0), 1)
+    twin.write_text(text[:2048] + second + text[3072:])
+    with pytest.raises(InputError, match=r"twin\.dem: USGS DEM profiles do not form a grid"):
+        read_dem(twin)
 
 
-def test_usgs_dem_vtk_errors_become_input_error(tmp_path, capfd):
-    from sciviz_gbuf.readers._dem_files import _vtk_dem_values
+def _quad(nrows: int = 40, ncols: int = 120):
+    """A 7.5-minute-quad-like file's content: a known plane z = 1500 + 0.02 x' - 0.03 y' (m,
+    x' / y' metres from the SW post), profiles starting and ending at northings that vary
+    across the quad (its edges are not grid lines), a void post, and local datum elevations."""
+    r, c = np.mgrid[0:nrows, 0:ncols]
+    plane = 1500.0 + 0.02 * 30 * c - 0.03 * 30 * r  # row 0 south
+    elev = np.round(plane / 0.5).astype(np.int64)  # 0.5 m units
+    starts = [int(5 + 4 * np.sin(k / 17.0)) for k in range(ncols)]
+    counts = [nrows - s - int(3 + 2 * np.cos(k / 11.0)) for k, s in enumerate(starts)]
+    elev[starts[7] + 2, 7] = -32767  # a void post
+    datums = [100.0 if k % 4 == 0 else 0.0 for k in range(ncols)]
+    return elev, starts, counts, datums
 
-    with pytest.raises(InputError, match=r"gone\.dem: vtkDEMReader could not read.*not found"):
-        _vtk_dem_values(tmp_path / "gone.dem", 2, 100)
-    assert "ERROR" not in capfd.readouterr().err  # taken off VTK's output window
+
+def test_usgs_quad_profiles_placed_by_northing_with_datum_and_crs(tmp_path):
+    """The profile-start defect: profiles of a real quad all say row 1; where they start is
+    their first post's northing. Every post must land at its own (x, y) with its height."""
+    elev, starts, counts, datums = _quad()
+    path = tmp_path / "quad.dem"
+    write_usgs_dem(
+        path, elev, starts, counts, row_ids_one=True, datum_elevations=datums, datum_code=4,
+        zone=13,
+    )  # fmt: skip
+    dem = read_dem(path)
+    assert dem.crs == "EPSG:26913"  # NAD83 / UTM zone 13N, from the header
+    s0 = min(starts)
+    nrows = max(s + n for s, n in zip(starts, counts, strict=True)) - s0
+    assert dem.shape == (nrows, 120)
+    x0, dx, _, ytop, _, dy = dem.transform
+    assert (x0, dx, dy) == (500000.0 - 15.0, 30.0, -30.0)
+    assert ytop == 4000000.0 + s0 * 30.0 + (nrows - 0.5) * 30.0
+    for c, (s, n) in enumerate(zip(starts, counts, strict=True)):
+        rows = nrows - 1 - (np.arange(s, s + n) - s0)  # our rows, north first
+        col = dem.heights[rows, c]
+        want = 0.5 * elev[s : s + n, c]
+        void = elev[s : s + n, c] == -32767
+        np.testing.assert_array_equal(col[~void], want[~void].astype(np.float32))
+        assert np.isnan(col[void]).all()
+        outside = np.ones(nrows, bool)
+        outside[rows] = False
+        assert np.isnan(dem.heights[outside, c]).all()  # no fill value outside the profile
+    assert int(np.isnan(dem.heights).sum()) == nrows * 120 - sum(counts) + 1
+
+
+def test_usgs_quad_agrees_with_gdal(tmp_path):
+    """GDAL's USGSDEM driver (through rasterio) as an independent reader of the same file:
+    every post at the same map position, the same height, the same CRS."""
+    rasterio = pytest.importorskip("rasterio")
+    elev, starts, counts, datums = _quad()
+    path = tmp_path / "quad.dem"
+    write_usgs_dem(
+        path, elev, starts, counts, row_ids_one=True, datum_elevations=datums, datum_code=4,
+    )  # fmt: skip
+    dem = read_dem(path)
+    with rasterio.open(path) as src:
+        ref = src.read(1, masked=True).astype(np.float64).filled(np.nan)
+        gt = src.transform
+        assert src.crs.to_epsg() == 26913
+    rows, cols = np.nonzero(dem.mask)
+    x0, dx, _, ytop, _, dy = dem.transform
+    xs, ys = x0 + (cols + 0.5) * dx, ytop + (rows + 0.5) * dy
+    gc = np.floor((xs - gt.c) / gt.a).astype(int)
+    gr = np.floor((ys - gt.f) / gt.e).astype(int)
+    np.testing.assert_allclose(ref[gr, gc], dem.heights[rows, cols], rtol=0, atol=1e-3)
+    assert np.isnan(ref).sum() - np.isnan(dem.heights).sum() == ref.size - dem.heights.size
 
 
 # --- xarray DataArray -----------------------------------------------------------------------
@@ -620,3 +675,17 @@ def test_to_pyvista_geographic_metres_and_step(shared_data):
     for bad in (0, 1.5, True):
         with pytest.raises(InputError, match="step must be an integer"):
             dem.to_pyvista(step=bad)
+
+
+def test_cli_geotiff_of_a_usgs_quad_carries_its_crs(tmp_path):
+    rasterio = pytest.importorskip("rasterio")
+    from tests.helpers.cli import run_cli
+
+    elev, starts, counts, _ = _quad()
+    path = tmp_path / "quad.dem"
+    write_usgs_dem(path, elev, starts, counts, row_ids_one=True, datum_code=3, zone=12)
+    png, tif = tmp_path / "quad.png", tmp_path / "quad.tif"
+    proc = run_cli(["topo", path, "-o", png, "--geotiff", tif])
+    assert proc.returncode == 0, proc.stderr
+    with rasterio.open(tif) as src:
+        assert src.crs.to_epsg() == 32612  # WGS 84 / UTM zone 12N
