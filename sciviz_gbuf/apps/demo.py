@@ -16,6 +16,7 @@ shows every image with a caption, the camera (of the captures) and the timings.
 from __future__ import annotations
 
 import html
+import os
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -666,11 +667,25 @@ def _write_index(scenes: list[_Scene], figures: list[_Figure], outdir: Path) -> 
     return path
 
 
+def numba_cache_is_cold() -> bool:
+    """True if the package's numba kernels are not in numba's cache yet (a first run: they
+    compile as they are first called). Looks for the index of the edge pass, which every run
+    of the demo, the styles and the explorer calls, where numba keeps it: under
+    ``NUMBA_CACHE_DIR`` if set, else beside the module (``__pycache__``)."""
+    pattern = "*_edge_kernels.edge_pass-*.nbi"
+    root = os.environ.get("NUMBA_CACHE_DIR")
+    if root:
+        return not any(Path(root).rglob(pattern))
+    here = Path(__file__).resolve().parents[1] / "filters" / "__pycache__"
+    return not any(here.glob(pattern))
+
+
 def run_demo(
     outdir: str | Path = "sciviz_gbuf_demo",
     *,
     window_size: tuple[int, int] = (800, 600),
     progress_bar: bool = False,
+    report: Callable[[str], None] | None = None,
 ) -> list[Path]:
     """Capture the sample scenes; write their channels, G-buffers, the paper's edge and contour
     figures and a gallery page.
@@ -684,6 +699,10 @@ def run_demo(
         contour figures are square, ``min(width, height, 800)`` pixels across (at least 16).
     progress_bar : bool, default: False
         Show a progress bar for each capture.
+    report : callable, optional
+        Called with one line of text as each scene and figure starts and ends (which one, how
+        long it took, and on a first run that the kernels compile): the command line prints
+        them on a terminal.
 
     Returns
     -------
@@ -699,13 +718,24 @@ def run_demo(
     width, height = check_window_size(window_size)
     out = Path(outdir)
     out.mkdir(parents=True, exist_ok=True)
+    say = report if report is not None else (lambda _line: None)
+    if numba_cache_is_cold():
+        say(
+            "first run: the numba kernels compile as each figure first needs them and are "
+            "cached for later runs (those take a fraction of the time)"
+        )
     scenes = _scenes(width / height)
-    for scene in scenes:
-        _write_scene(scene, out, (width, height), progress_bar)
     figures = _edge_figures() + _contour_figures(max(16, min(width, height, CONTOUR_SIZE)))
     figures += _terrain_figures((width, height)) + _medical_figures((width, height))
     figures += _surface_figures((width, height)) + _npr_figures((width, height))
-    for fig in figures:
-        _write_figure(fig, out, (width, height), progress_bar)
+    steps = [(sc.title, _write_scene, sc) for sc in scenes]
+    steps += [(fig.title, _write_figure, fig) for fig in figures]
+    t_all = time.perf_counter()
+    for k, (title, write, item) in enumerate(steps, 1):
+        t0 = time.perf_counter()
+        say(f"[{k}/{len(steps)}] {title} ...")
+        write(item, out, (width, height), progress_bar)
+        say(f"[{k}/{len(steps)}] {title}: {time.perf_counter() - t0:.1f} s "
+            f"({time.perf_counter() - t_all:.0f} s in all)")  # fmt: skip
     files = [p for s in scenes for p in s.files] + [p for f in figures for _, p in f.images]
     return [*files, _write_index(scenes, figures, out)]

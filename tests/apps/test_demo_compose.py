@@ -260,10 +260,23 @@ COLOUR_BAR = re.compile(
 )
 
 
+REPORTED: list[str] = []
+
+
 @pytest.fixture(scope="module")
 def demo(tmp_path_factory):
     outdir = tmp_path_factory.mktemp("demo")
-    return outdir, run_demo(outdir, window_size=WINDOW)
+    return outdir, run_demo(outdir, window_size=WINDOW, report=REPORTED.append)
+
+
+def test_run_demo_reports_every_step_as_it_starts_and_ends(demo):
+    steps = [line for line in REPORTED if line.startswith("[")]
+    n = int(steps[0].split("/")[1].split("]")[0])
+    assert n >= 10 and len(steps) == 2 * n
+    for k in range(1, n + 1):
+        start, end = steps[2 * k - 2], steps[2 * k - 1]
+        assert start.startswith(f"[{k}/{n}] ") and start.endswith(" ...")
+        assert end.startswith(start[:-4] + ": ") and end.endswith(" s in all)")
 
 
 def test_run_demo_files(demo):
@@ -501,3 +514,14 @@ def test_gallery_is_a_navigable_grid_in_a_real_browser(demo):
             assert driver.execute_script(f"return !!document.querySelector('{t}');"), t
     finally:
         driver.quit()
+
+
+def test_numba_cache_is_cold_looks_where_numba_keeps_its_cache(tmp_path, monkeypatch):
+    from sciviz_gbuf.apps.demo import numba_cache_is_cold
+
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    assert numba_cache_is_cold()
+    deep = tmp_path / "work" / "sciviz_gbuf" / "filters"
+    deep.mkdir(parents=True)
+    (deep / "_edge_kernels.edge_pass-1021.py311.nbi").write_bytes(b"")
+    assert not numba_cache_is_cold()
