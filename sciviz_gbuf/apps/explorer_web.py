@@ -99,6 +99,15 @@ CAMERA = (
 )
 
 
+#: Height of the page around the picture (toolbar and padding), so the picture fits the window.
+_CHROME_PX = 96
+
+
+def _wrap(expr: str) -> str:
+    """A JavaScript expression of an azimuth in degrees wrapped into [-180, 180)."""
+    return f"((({expr}) % 360 + 540) % 360 - 180)"
+
+
 #: Parameters set by selects or ranged sliders rather than by :data:`SLIDERS`.
 PARAMS = ("style", "contour_interval", "view", "relief", "map_interval")
 
@@ -203,10 +212,9 @@ def build_app(
         keep_error[0] = False
         state.image_url = encode_jpeg_data_url(rgb)
         # A map has one pixel per DEM cell: small DEMs are shown enlarged.
+        fit = f"max-width: 100%; max-height: calc(100vh - {_CHROME_PX}px); object-fit: contain"
         state.image_style = (
-            f"width: {max(rgb.shape[1], 768)}px; max-width: 100%"
-            if values["view"] == "map"
-            else "max-width: 100%"
+            f"width: {max(rgb.shape[1], 768)}px; {fit}" if values["view"] == "map" else fit
         )
         state.filter_ms = round(explorer.last_ms, 1)
         state.update_ms = round((time.perf_counter() - t0) * 1e3, 1)
@@ -231,18 +239,24 @@ def build_app(
         refresh()
 
     def slider(name: str, label: str, lo_: float, hi_, step) -> None:
-        # The id sits on a wrapper: Vuetify hands a slider's own id to its label.
+        # The id sits on a wrapper: Vuetify hands a slider's own id to its label. The value is
+        # always shown beside the label (a thumb label shows it only while dragging).
         with html.Div(id=_dom_id(name)):
+            html.Div(
+                f"{label}: {{{{ {name} }}}}",
+                id=_dom_id(name) + "-value",
+                classes="text-caption mt-1",
+            )
             v3.VSlider(
                 v_model=(name,),
-                label=label,
                 min=lo_,
                 max=hi_,
                 step=step,
                 thumb_label=True,
                 density="compact",
                 hide_details=True,
-                classes="my-1",
+                classes="mb-1",
+                aria_label=label,
             )
 
     with SinglePageLayout(server) as layout:
@@ -311,7 +325,31 @@ def build_app(
                         for spec in CAMERA:
                             slider(*spec)
                     html.Div("{{ error }}", id="error", classes="text-error")
-                with v3.VCol():
+                # The picture: within the window (no scrolling to see it whole); focused, the
+                # arrow keys orbit the camera (5° a press), + and - zoom.
+                with v3.VCol(
+                    id="view-box",
+                    tabindex="0",
+                    v_show="true",
+                    v_on_keydown_left_prevent=(
+                        f"view !== 'map' && (camera_azimuth = {_wrap('camera_azimuth - 5')})"
+                    ),
+                    v_on_keydown_right_prevent=(
+                        f"view !== 'map' && (camera_azimuth = {_wrap('camera_azimuth + 5')})"
+                    ),
+                    v_on_keydown_up_prevent=(
+                        "view !== 'map' && (camera_elevation = Math.min(89, camera_elevation + 5))"
+                    ),
+                    v_on_keydown_down_prevent=(
+                        "view !== 'map' && (camera_elevation = Math.max(-89, camera_elevation - 5))"
+                    ),
+                    v_on_keydown=(
+                        "view !== 'map' && ['+', '=', '-'].includes($event.key) && "
+                        "(camera_zoom = $event.key === '-' ? "
+                        "Math.max(0.5, +(camera_zoom / 1.1).toFixed(2)) : "
+                        "Math.min(4, +(camera_zoom * 1.1).toFixed(2)))"
+                    ),
+                ):
                     html.Img(src=("image_url",), id="image", style=("image_style",))
     refresh()
     return server

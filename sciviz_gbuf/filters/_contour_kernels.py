@@ -40,6 +40,7 @@ SWITCH = 17  # hatching: spacing ratio where the in-between lines appear
 INV_FADE = 18  # hatching: 1 / width of that transition
 GAP = 19  # the interval, or the smallest gap between levels (generalisation; not in kernels)
 MAJOR_WIDTH = 20  # width of the major lines (generalisation's default ring size; not in kernels)
+MODULATE = 21  # hatching: 1 if aux is a modulation and prm[NPRM:] the thin line's (else 0)
 NPRM = 22
 
 _Z = np.float32(0.0)

@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from ._contour_kernels import NPRM, hatch_ink, levels_ink, regular_ink
+from ._contour_kernels import MODULATE, NPRM, hatch_ink, levels_ink, regular_ink
 
 __all__ = ["diag_normal", "run"]
 
@@ -94,9 +94,7 @@ def _suppress(x, a, b, c, d, e, f, g, h, k, aux, prm):
 
 # Operator codes: they pick the border rule and the neutral value; the operator itself is
 # passed to the row loop as a function, so each kernel compiles only its own operator.
-(SOBEL, SECOND, C1, DIAG_DEPTH, NORMALIZE, SUPPRESS, CONTOUR, LEVELS, HATCH, MODULATED_HATCH) = (
-    range(10)
-)
+SOBEL, SECOND, C1, DIAG_DEPTH, NORMALIZE, SUPPRESS, CONTOUR, LEVELS, HATCH = range(9)
 
 
 @njit(inline="always", cache=True)
@@ -140,15 +138,15 @@ def _levels(x, a, b, c, d, e, f, g, h, k, aux, prm):
 
 @njit(inline="always", cache=True)
 def _hatch(x, a, b, c, d, e, f, g, h, k, aux, prm):
-    return hatch_ink(x, aux if k > 0 else _grad(x, a, b, c, d, e, f, g, h, k, aux, prm), prm)
-
-
-@njit(inline="always", cache=True)
-def _modulated_hatch(x, a, b, c, d, e, f, g, h, k, aux, prm):
-    """Hatching at two widths from one gradient (``prm``: the full line's parameters, the thin
-    line's at ``NPRM``), blended by the modulation ``aux`` (``contours.modulated_hatching``)."""
+    """Curved hatching (Eq. 17-21) with the caller's gradient in ``aux`` if ``k > 0``; with
+    ``prm[MODULATE]`` set, ``aux`` is a modulation instead (``contours.modulated_hatching``):
+    the lines at two widths from one gradient (the thin line's parameters at ``prm[NPRM:]``),
+    blended by it. One kernel for both: each kernel costs tens of seconds to compile."""
+    modulated = prm[MODULATE] > 0
     own = _grad(x, a, b, c, d, e, f, g, h, k, aux, prm)
-    full = hatch_ink(x, own, prm)
+    full = hatch_ink(x, aux if (k > 0) & (not modulated) else own, prm)
+    if not modulated:
+        return full
     thin = hatch_ink(x, own, prm[NPRM:])
     m = min(aux if aux > 0 else np.float32(0.0), _ONE)  # clipped to [0, 1], NaN -> 0
     if m >= _H:
@@ -398,11 +396,6 @@ def _k_hatch(img, m, k, aux, prm, out):
     _rows(HATCH, _hatch, img, m, k, aux, prm, out)
 
 
-@njit(parallel=True, cache=True, fastmath={"contract"})
-def _k_modulated_hatch(img, m, k, aux, prm, out):
-    _rows(MODULATED_HATCH, _modulated_hatch, img, m, k, aux, prm, out)
-
-
 _KERNELS = {
     "sobel": _k_sobel,
     "second": _k_second,
@@ -413,7 +406,6 @@ _KERNELS = {
     "contour": _k_contour,
     "levels": _k_levels,
     "hatch": _k_hatch,
-    "modulated_hatch": _k_modulated_hatch,
 }
 
 

@@ -535,5 +535,6 @@ def modulated_hatching(
         )
     mod = np.ascontiguousarray(mod, dtype=np.float32)
     # the thin line's parameters follow the full one's (the kernel reads them at NPRM)
+    full[_p.MODULATE] = 1.0
     prm = np.concatenate([full, thin]).astype(np.float32)
-    return _stencil.run("modulated_hatch", s, m, aux=mod, prm=prm)
+    return _stencil.run("hatch", s, m, aux=mod, prm=prm)

@@ -267,8 +267,34 @@ def test_browser_slider_updates_the_image(explorer_server, capsys):
         server_ms = driver.execute_script(
             "return document.getElementById('update-ms').textContent;"
         )
+        # the slider's value is on the page, not only while dragging
+        shown = driver.execute_script(
+            "return document.getElementById('slider-crease-angle-value').textContent;"
+        )
+        # the picture fits the window: no scrolling to see it whole
+        bottom, height = driver.execute_script(
+            "return [document.getElementById('image').getBoundingClientRect().bottom, "
+            "window.innerHeight];"
+        )
+        # keyboard: the focused picture orbits with the arrow keys
+        azimuth_text = "return document.getElementById('slider-camera-azimuth-value').textContent;"
+        az0 = driver.execute_script(azimuth_text)
+        src2 = driver.execute_script(get_src)
+        driver.execute_script(
+            "const v = document.getElementById('view-box'); v.focus();"
+            "v.dispatchEvent(new KeyboardEvent('keydown', {key: 'ArrowRight', bubbles: true}));"
+        )
+        deadline = time.monotonic() + 30.0
+        while driver.execute_script(get_src) == src2:
+            assert time.monotonic() < deadline, "the arrow key did not move the camera"
+            time.sleep(0.05)
+        az1 = driver.execute_script(azimuth_text)
     finally:
         driver.quit()
+    assert shown.split(":")[-1].strip() == str(after).strip()
+    assert 0 < bottom <= height + 1, (bottom, height)
+    a0, a1 = (float(t.split(":")[-1]) for t in (az0, az1))
+    assert (a1 - a0 - 5.0) % 360.0 == pytest.approx(0.0, abs=1e-6), (a0, a1)
     with capsys.disabled():
         print(
             f"\nbrowser 512x384: key press -> new image {page_ms:.1f} ms (page clock), "

@@ -285,3 +285,12 @@ def test_corrupted_headers_give_a_volume_or_an_input_error(tmp_path, data, which
         assert "bad." in str(exc)
         return
     assert ds.n_points == len(ds["HU"]) and np.isfinite(ds.points).all()
+
+
+def test_explorer_shows_a_volume_file_as_its_bone_surface(tmp_path):
+    from sciviz_gbuf.apps.explorer import Explorer
+
+    e = Explorer.from_file(_ball(tmp_path / "ball.nii.gz"), window_size=(120, 90))
+    assert e.kind == "dicom"  # a CT volume: its bone surface, seen as DICOM is
+    e.render_image({"style": "toon"})
+    assert e.gbuffer.mask.mean() > 0.1
