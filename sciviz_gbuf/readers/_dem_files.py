@@ -347,7 +347,6 @@ USGS_VOID = -32767
 _A_FIELDS = {
     "system": (156, 12),  # ground reference system (0 geographic, 1 UTM, 2 state plane), zone
     "units": (528, 18),  # ground (plane) unit, elevation unit, polygon sides, 3 x 6
-    "corners": (546, 192),  # SW, NW, NE, SE (x, y), 8 x 24
     "resolution": (816, 36),  # x, y, z, 3 x 12
     "profiles": (852, 12),  # rows, columns, 2 x 6
 }

@@ -170,6 +170,19 @@ def _header_lines(p: Path, raw: bytes, blank_ends: bool) -> tuple[list[str], int
     return lines, len(raw)
 
 
+def _data_bytes(p: Path, field: str, name: str | None, data_at: int) -> bytes:
+    """The data of a header ``p``: its own bytes from ``data_at`` on (``name`` None), else the
+    file ``name`` (header ``field``) beside it."""
+    if name is None:
+        with open(p, "rb") as f:
+            f.seek(data_at)
+            return f.read()
+    src = (p.parent / name).resolve()
+    if not src.is_file():
+        raise InputError(f"{p}: {field}: {src} does not exist")
+    return src.read_bytes()
+
+
 def _numbers(p: Path, field: str, text: str, n: int | None = None) -> np.ndarray:
     try:
         vals = np.array([float(v) for v in text.replace(",", " ").split()], dtype=np.float64)
@@ -217,17 +230,11 @@ def _read_nrrd(p: Path) -> tuple[np.ndarray, np.ndarray, str]:
     if data_file is not None:
         if data_file.upper().startswith("LIST") or " " in data_file.strip():
             raise InputError(f"{p}: data file: {data_file!r}: only one data file is supported")
-        src = (p.parent / data_file).resolve()
-        if not src.is_file():
-            raise InputError(f"{p}: data file: {src} does not exist")
-        with open(src, "rb") as f:
-            blob = f.read()
+        blob = _data_bytes(p, "data file", data_file, data_at)
     elif p.suffix.lower() == ".nhdr":
         raise InputError(f"{p}: a detached header (.nhdr) needs a 'data file' field")
     else:
-        with open(p, "rb") as f:
-            f.seek(data_at)
-            blob = f.read()
+        blob = _data_bytes(p, "data file", None, data_at)
     count = int(np.prod(sizes))
     values = _decode(p, blob, fields["encoding"].lower(), dtype, count, fields)
     values = values.reshape(tuple(sizes), order="F")  # the first axis runs fastest
@@ -341,18 +348,10 @@ def _read_meta(p: Path) -> tuple[np.ndarray, np.ndarray, str]:
     msb = fields.get("BinaryDataByteOrderMSB", fields.get("ElementByteOrderMSB", "False"))
     dtype = np.dtype((">" if msb.lower() == "true" else "<") + code)
     name = fields["ElementDataFile"]
-    if name.upper() == "LOCAL":
-        with open(p, "rb") as f:
-            f.seek(data_at)
-            blob = f.read()
-    else:
-        if name.upper() == "LIST" or "%" in name:
-            raise InputError(f"{p}: ElementDataFile: {name!r}: only one data file is supported")
-        src = (p.parent / name).resolve()
-        if not src.is_file():
-            raise InputError(f"{p}: ElementDataFile: {src} does not exist")
-        with open(src, "rb") as f:
-            blob = f.read()
+    if name.upper() == "LIST" or "%" in name:
+        raise InputError(f"{p}: ElementDataFile: {name!r}: only one data file is supported")
+    local = name.upper() == "LOCAL"
+    blob = _data_bytes(p, "ElementDataFile", None if local else name, data_at)
     count = int(np.prod(sizes))
     if fields.get("CompressedData", "False").lower() == "true":
         blob = _inflate(p, blob, count * dtype.itemsize, wbits=15)
