@@ -3,21 +3,43 @@
 Capture float32 G-buffers of a PyVista scene once (:func:`capture`), then run any number of
 image-space enhancements on them (:mod:`sciviz_gbuf.filters`), following Saito & Takahashi
 (SIGGRAPH 1990) and Nienhaus & Döllner (WSCG 2003).
+
+The names below are imported on first use (PEP 562), so ``import sciviz_gbuf`` (and the
+command line's first line of output) does not wait for VTK, PyVista and numba to load.
+PyVista finds the ``.gbuf`` accessor and Plotter component through the package's entry
+points, without this import.
 """
 
 from __future__ import annotations
 
-from .core.camera import CameraInfo
-from .core.capture import CaptureSession, capture
-from .core.gbuffer import GBuffer
-from .errors import InputError, OutputError, RenderError, SciVizGBufError
-from .recipes.birdseye import birdseye_map, sumi_e
-from .recipes.medical import ct_enhance
-from .recipes.surface import surface_analysis
-from .recipes.terrain import topographic_map
-from .writers.cog import local_client, write_cog
+import importlib
+from typing import TYPE_CHECKING
 
 __version__ = "0.1.0"
+
+#: Public name -> module (relative to this package) that defines it.
+_EXPORTS = {
+    "CameraInfo": "core.camera",
+    "CaptureSession": "core.capture",
+    "capture": "core.capture",
+    "GBuffer": "core.gbuffer",
+    "InputError": "errors",
+    "OutputError": "errors",
+    "RenderError": "errors",
+    "SciVizGBufError": "errors",
+    "birdseye_map": "recipes.birdseye",
+    "sumi_e": "recipes.birdseye",
+    "ct_enhance": "recipes.medical",
+    "surface_analysis": "recipes.surface",
+    "topographic_map": "recipes.terrain",
+    "local_client": "writers.cog",
+    "write_cog": "writers.cog",
+}
+#: Subpackages and modules reachable as attributes (``sg.filters``) without their own import.
+_SUBMODULES = (
+    "apps", "cli", "compose", "core", "datasets", "errors", "filters", "pyvista_plugin",
+    "readers", "recipes", "styles", "vtk_algorithms", "writers",
+)  # fmt: skip
 
 __all__ = [
     "CameraInfo",
@@ -36,8 +58,32 @@ __all__ = [
     "surface_analysis",
     "topographic_map",
     "write_cog",
-]
+]  # = _EXPORTS and __version__ (tests/test_structure.py checks)
 
-# Register PyVista's ``.gbuf`` dataset accessor and plotter component (also declared as entry
-# points, so ``pv.Sphere().gbuf`` works without this import; idempotent).
-from . import pyvista_plugin as _pyvista_plugin  # noqa: F401
+
+def __getattr__(name: str) -> object:
+    module = _EXPORTS.get(name)
+    if module is not None:
+        value = getattr(importlib.import_module(f".{module}", __name__), name)
+    elif name in _SUBMODULES:
+        value = importlib.import_module(f".{name}", __name__)
+    else:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    globals()[name] = value  # later look-ups find it directly
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_EXPORTS, *_SUBMODULES})
+
+
+if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerly
+    from .core.camera import CameraInfo
+    from .core.capture import CaptureSession, capture
+    from .core.gbuffer import GBuffer
+    from .errors import InputError, OutputError, RenderError, SciVizGBufError
+    from .recipes.birdseye import birdseye_map, sumi_e
+    from .recipes.medical import ct_enhance
+    from .recipes.surface import surface_analysis
+    from .recipes.terrain import topographic_map
+    from .writers.cog import local_client, write_cog

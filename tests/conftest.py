@@ -19,13 +19,14 @@ _WARMUP: subprocess.Popen | None = None
 
 
 def pytest_configure(config):
-    """Compile numba kernels on the other core meanwhile (see ``_numba_warmup.py``): on a
-    fresh clone compiling them is most of the run, and numba compiles on one core."""
+    """Compile numba kernels on the other core meanwhile (``sciviz_gbuf.apps.warmup``'s
+    ``all`` job): on a fresh clone compiling them is most of the run, and numba compiles on
+    one core."""
     global _WARMUP
     if os.environ.get("SCIVIZ_GBUF_NO_WARMUP") or hasattr(config, "workerinput"):
         return
     _WARMUP = subprocess.Popen(
-        [sys.executable, str(Path(__file__).with_name("_numba_warmup.py"))],
+        [sys.executable, "-m", "sciviz_gbuf.apps.warmup", "all"],
         stdin=subprocess.DEVNULL,
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,

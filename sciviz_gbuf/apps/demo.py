@@ -16,7 +16,6 @@ shows every image with a caption, the camera (of the captures) and the timings.
 from __future__ import annotations
 
 import html
-import os
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -32,6 +31,7 @@ from ..compose import colorize, ids_to_rgb, montage, normals_to_rgb, with_colorb
 from ..core.capture import capture, check_window_size
 from ..core.gbuffer import GBuffer
 from ..datasets import load_frog_skeleton, load_jacksboro_dem, load_jacksboro_terrain, load_nut
+from ..errors import InputError, OutputError
 from ..filters import lambert
 from ..recipes import CAPTIONS as EDGE_CAPTIONS
 from ..recipes import (
@@ -57,6 +57,9 @@ from ..recipes import (
 )
 from ..recipes.npr import MIRROR_CAMERA, mirror_scene
 from ..styles.illustration import LIGHT, shade_image
+from .warmup import numba_cache_is_cold, run_steps
+from .warmup import start as start_warmup
+from .warmup import stop as stop_warmup
 
 __all__ = ["run_demo", "terrain_birdseye_camera"]
 
@@ -667,17 +670,30 @@ def _write_index(scenes: list[_Scene], figures: list[_Figure], outdir: Path) -> 
     return path
 
 
-def numba_cache_is_cold() -> bool:
-    """True if the package's numba kernels are not in numba's cache yet (a first run: they
-    compile as they are first called). Looks for the index of the edge pass, which every run
-    of the demo, the styles and the explorer calls, where numba keeps it: under
-    ``NUMBA_CACHE_DIR`` if set, else beside the module (``__pycache__``)."""
-    pattern = "*_edge_kernels.edge_pass-*.nbi"
-    root = os.environ.get("NUMBA_CACHE_DIR")
-    if root:
-        return not any(Path(root).rglob(pattern))
-    here = Path(__file__).resolve().parents[1] / "filters" / "__pycache__"
-    return not any(here.glob(pattern))
+def _steps(width: int, height: int) -> list[tuple[str, Callable, object]]:
+    """The demo's steps in order: ``(title, writer, scene or figure)``."""
+    scenes = _scenes(width / height)
+    figures = _edge_figures() + _contour_figures(max(16, min(width, height, CONTOUR_SIZE)))
+    figures += _terrain_figures((width, height)) + _medical_figures((width, height))
+    figures += _surface_figures((width, height)) + _npr_figures((width, height))
+    steps: list[tuple[str, Callable, object]] = [(sc.title, _write_scene, sc) for sc in scenes]
+    return steps + [(fig.title, _write_figure, fig) for fig in figures]
+
+
+#: Window size of the second process's steps (:mod:`.warmup`): small, so that compiling is
+#: nearly all it does, and large enough for every figure's code path.
+WARMUP_SIZE = (160, 120)
+
+
+def _warm() -> None:
+    """The second process of a first run (``python -m sciviz_gbuf.apps.demo --warmup``): the
+    demo's steps at :data:`WARMUP_SIZE` in reverse order, into a folder that is then removed."""
+    import tempfile
+
+    with tempfile.TemporaryDirectory(prefix="sciviz_gbuf_warmup_") as tmp:
+        out = Path(tmp)
+        steps = _steps(*WARMUP_SIZE)[::-1]
+        run_steps(partial(write, item, out, WARMUP_SIZE, False) for _, write, item in steps)
 
 
 def run_demo(
@@ -717,25 +733,39 @@ def run_demo(
     """
     width, height = check_window_size(window_size)
     out = Path(outdir)
-    out.mkdir(parents=True, exist_ok=True)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"output: {str(out)!r} is a file; expected a folder (new or existing)")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(f"output: cannot make the folder {str(out)!r}: {exc.strerror}") from None
     say = report if report is not None else (lambda _line: None)
+    second = None
     if numba_cache_is_cold():
         say(
-            "first run: the numba kernels compile as each figure first needs them and are "
-            "cached for later runs (those take a fraction of the time)"
+            "first run: the numba kernels compile as each figure first needs them (on both "
+            "cores) and are cached for later runs (those take a fraction of the time)"
         )
-    scenes = _scenes(width / height)
-    figures = _edge_figures() + _contour_figures(max(16, min(width, height, CONTOUR_SIZE)))
-    figures += _terrain_figures((width, height)) + _medical_figures((width, height))
-    figures += _surface_figures((width, height)) + _npr_figures((width, height))
-    steps = [(sc.title, _write_scene, sc) for sc in scenes]
-    steps += [(fig.title, _write_figure, fig) for fig in figures]
+        second = start_warmup(["sciviz_gbuf.apps.demo", "--warmup"])
+    steps = _steps(width, height)
     t_all = time.perf_counter()
-    for k, (title, write, item) in enumerate(steps, 1):
-        t0 = time.perf_counter()
-        say(f"[{k}/{len(steps)}] {title} ...")
-        write(item, out, (width, height), progress_bar)
-        say(f"[{k}/{len(steps)}] {title}: {time.perf_counter() - t0:.1f} s "
-            f"({time.perf_counter() - t_all:.0f} s in all)")  # fmt: skip
+    try:
+        for k, (title, write, item) in enumerate(steps, 1):
+            t0 = time.perf_counter()
+            say(f"[{k}/{len(steps)}] {title} ...")
+            write(item, out, (width, height), progress_bar)
+            say(f"[{k}/{len(steps)}] {title}: {time.perf_counter() - t0:.1f} s "
+                f"({time.perf_counter() - t_all:.0f} s in all)")  # fmt: skip
+    finally:
+        stop_warmup(second)
+    scenes = [item for _, write, item in steps if write is _write_scene]
+    figures = [item for _, write, item in steps if write is _write_figure]
     files = [p for s in scenes for p in s.files] + [p for f in figures for _, p in f.images]
     return [*files, _write_index(scenes, figures, out)]
+
+
+if __name__ == "__main__":
+    import sys
+
+    if sys.argv[1:] == ["--warmup"]:
+        _warm()

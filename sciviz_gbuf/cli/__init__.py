@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import argparse
+import importlib
 import sys
 import warnings
 from collections.abc import Sequence
@@ -12,29 +13,27 @@ from typing import NoReturn
 from .. import __version__
 from .._atomic import Interrupted, one_line, output_group, raising_signals
 from ..errors import SciVizGBufError
-from .demo import add_demo
-from .explore import add_explore
-from .gbuffer import add_capture, add_edges, add_info
-from .medical import add_ct
-from .mesh import add_mesh
-from .surface import add_patches
-from .terrain import add_birdseye, add_topo
 
 __all__ = ["build_parser", "main"]
 
-#: The commands in ``--help`` order: each adds its sub-parser.
+#: The commands in ``--help`` order: ``(module, function)`` that adds each sub-parser. The
+#: modules are imported when the parser is built, not with this package: their imports (VTK,
+#: PyVista, numba) take seconds, and :func:`main` says it is starting before that.
 COMMANDS = (
-    add_demo,
-    add_capture,
-    add_edges,
-    add_topo,
-    add_birdseye,
-    add_ct,
-    add_patches,
-    add_mesh,
-    add_explore,
-    add_info,
+    ("demo", "add_demo"),
+    ("gbuffer", "add_capture"),
+    ("gbuffer", "add_edges"),
+    ("terrain", "add_topo"),
+    ("terrain", "add_birdseye"),
+    ("medical", "add_ct"),
+    ("surface", "add_patches"),
+    ("mesh", "add_mesh"),
+    ("explore", "add_explore"),
+    ("gbuffer", "add_info"),
 )
+#: Commands that take seconds or more: on a terminal (or with ``--progress``), :func:`main`
+#: prints one line as they start, before the imports.
+_LONG = {"demo", "capture", "edges", "topo", "birdseye", "ct", "patches", "mesh", "explore"}
 
 
 class _Parser(argparse.ArgumentParser):
@@ -54,9 +53,20 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
-    for add in COMMANDS:
-        add(sub)
+    for module, function in COMMANDS:
+        getattr(importlib.import_module(f".{module}", __name__), function)(sub)
     return parser
+
+
+def _announce(argv: Sequence[str]) -> None:
+    """One line on stderr as a long command starts (on a terminal, or with ``--progress``;
+    never with ``--no-progress`` or ``--help``): loading the libraries takes seconds, a first
+    run minutes more, and a command that says nothing looks hung."""
+    if not argv or argv[0] not in _LONG or {"-h", "--help", "--no-progress"} & set(argv):
+        return
+    if "--progress" in argv or sys.stderr.isatty():
+        print(f"sciviz-gbuf {argv[0]}: starting (loading VTK, PyVista and numba) ...",
+              file=sys.stderr, flush=True)  # fmt: skip
 
 
 def _drop_warning(*args: object, **kwargs: object) -> None:
@@ -67,6 +77,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit status: 0, or 2 for bad input, an output that
     could not be written, or SIGTERM/SIGINT (one line on stderr; no output file is left
     half-written, see ``_atomic``)."""
+    _announce(sys.argv[1:] if argv is None else list(argv))
     args = build_parser().parse_args(argv)
     # SIGTERM and SIGINT become an exception, so that the writers' clean-up runs: the output
     # being written is removed and the process exits 2 with one line, not by the signal. The

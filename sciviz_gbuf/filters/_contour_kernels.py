@@ -77,7 +77,7 @@ def _float(typingctx, i):
     return None
 
 
-@njit(inline="always", cache=True)
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _octave(y):
     """``(1 / m, 2^e)`` with ``y = m 2^e``, ``m`` in [0.5, 1), for ``y`` clamped to
     [1e-30, 1e30] (frexp from the float's exponent and mantissa bits)."""
@@ -87,20 +87,20 @@ def _octave(y):
     return _ONE / m, _float((biased + 1) << 23)
 
 
-@njit(inline="always", cache=True)
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _line(t, a, cap, prm):
     """f1: ink at distance ``t >= 0`` px from the centre of a line (Eq. 8, Fig. 4)."""
     v = min(max(a - t * prm[LINE_B], _Z), _ONE)
     return cap * v * (prm[P1] + v * (prm[P2] + v * prm[P3]))
 
 
-@njit(inline="always", cache=True)
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _spacing(q, g):
     # On-screen spacing q / g of lines q apart, finite even where g = 0.
     return q / max(g, q / _BIG)
 
 
-@njit(inline="always", cache=True)
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _reached(p, lo, hi, ext):
     """1 if level ``p`` lies within the 3x3 neighbourhood's range ``(lo, hi]`` widened by
     ``ext``, else 0: a level the surface comes near but never crosses (a summit just below it)
@@ -110,7 +110,7 @@ def _reached(p, lo, hi, ext):
     return _ONE if (p > lo - ext) & (p <= hi + ext) else _Z
 
 
-@njit(inline="always", cache=True)
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _reach(a, g, cover, prm):
     """How far beyond the neighbourhood's range a line of profile ``a`` inks, in field units:
     it inks up to ``a / b`` pixels (of ``g``) from the level, the range spans at least one
@@ -136,14 +136,14 @@ def _family(x, g, q, a, cap, lo, hi, cover, prm):
     return min(c, _ONE), s
 
 
-@njit(inline="always", cache=True)
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _flat(c, g, prm):
     """f_g of Eq. 11: fade to ``c_sparse`` below ``g_eps``."""
     ws = min(g * prm[INV_GEPS], _ONE)
     return ws * c + (_ONE - ws) * prm[C_SPARSE]
 
 
-@njit(inline="always", cache=True)
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _flat_dense(c, g, s, prm):
     """f_g of Eq. 11 and 15: fade to ``c_sparse`` below ``g_eps``; where lines come closer than
     the dense spacing, fade to ``c_dense`` within one line width further."""
@@ -152,7 +152,7 @@ def _flat_dense(c, g, s, prm):
     return wd * c + (_ONE - wd) * prm[C_DENSE]
 
 
-@njit(inline="always", cache=True)
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _finite_ink(v):
     return min(max(v, _Z), _ONE) if v == v else _Z
 

@@ -913,16 +913,18 @@ def _best_crease(
     """The signed crease ink of pixel (r, c) in :func:`pair_edge_kernel`: the stronger of its
     pairs to the right (``bits & 1``) and below (``bits & 2``) that are candidates."""
     best = 0.0
+    # Typed steps, not literals: numba compiles a callee once per literal value it is given.
+    zero, one = np.int64(0), np.int64(1)
     if bits & 1:
         ink, geo = _pair_crease(
-            sz, depth, normal, m, r, c, 0, 1, h, w, parallel, inv_d, inv_w, jump, crease, soft,
+            sz, depth, normal, m, r, c, zero, one, h, w, parallel, inv_d, inv_w, jump, crease, soft,
             cos_min, cos_skip, may_h,
         )  # fmt: skip
         if ink > abs(best):
             best = ink if geo >= 0.0 else -ink
     if bits & 2:
         ink, geo = _pair_crease(
-            sz, depth, normal, m, r, c, 1, 0, h, w, parallel, inv_d, inv_w, jump, crease, soft,
+            sz, depth, normal, m, r, c, one, zero, h, w, parallel, inv_d, inv_w, jump, crease, soft,
             cos_min, cos_skip, may_v,
         )  # fmt: skip
         if ink > abs(best):
@@ -963,6 +965,230 @@ def _crease_row(
                 )  # fmt: skip
 
 
+@njit(cache=True)
+def _edge_pass_task(
+    t, sz, depth, normal, m, parallel, inv_d, inv_w, jump, crease, soft, do_crease, mode, out_a,
+    out_b, two, crease2, soft2, out_c, lo, hi, cos_min, cos_skip, cos_min_c, cos_skip_c,
+    cos_min2, cos_skip2,
+):  # fmt: skip
+    """One task of :func:`edge_pass`: rows ``t * _ROWS`` to ``(t + 1) * _ROWS``.
+
+    A function of its own, not the body of the ``prange`` loop: numba's parallel passes
+    analyse the loop body, and on this one they took most of a 47-s first compile."""
+    h, w = sz.shape
+    r0 = t * _ROWS
+    r1 = min(h, r0 + _ROWS)
+    # The task's span: columns within two pixels of a valid one in rows r0 - 2 .. r1 + 1.
+    a = w
+    b = np.int64(0)
+    for r in range(max(0, r0 - 2), min(h, r1 + 2)):
+        a = min(a, lo[r])
+        b = max(b, hi[r] + 1)
+    if a >= b:
+        a = b = 0
+    else:
+        a = max(0, a - 2)
+        b = min(w, b + 2)
+    for r in range(r0, r1):
+        for c in range(a):
+            out_a[r, c] = 0.0
+            out_b[r, c] = 0.0
+        for c in range(b, w):
+            out_a[r, c] = 0.0
+            out_b[r, c] = 0.0
+        if two:
+            for c in range(a):
+                out_c[r, c] = 0.0
+            for c in range(b, w):
+                out_c[r, c] = 0.0
+    if a >= b:
+        return
+    up_g = np.empty((4, w + 2), dtype=np.float64)
+    up_j = np.empty((4, w + 2), dtype=np.float64)
+    cur_g = np.empty((4, w + 2), dtype=np.float64)
+    cur_j = np.empty((4, w + 2), dtype=np.float64)
+    S = np.empty((4, w + 4), dtype=np.float64)
+    D = np.empty((4, w + 4), dtype=np.float64)
+    V = np.empty((4, w + 4), dtype=np.bool_)
+    EX = np.empty((4, w + 4), dtype=np.float64)
+    EY = np.empty((4, w + 4), dtype=np.float64)
+    EZ = np.empty((4, w + 4), dtype=np.float64)
+    prof = np.empty(w, dtype=np.float64)
+    may_h = np.zeros(w, dtype=np.bool_)
+    may_v = np.zeros(w, dtype=np.bool_)
+    dot_h = np.ones(w, dtype=np.float32)
+    dot_v = np.ones(w, dtype=np.float32)
+    dot_d1 = np.ones(w, dtype=np.float32)
+    dot_d2 = np.ones(w, dtype=np.float32)
+    ins = np.empty(4, dtype=np.float64)
+    cand = np.zeros(w, dtype=np.uint8)
+    cre_row = np.empty(w, dtype=np.float64)
+    cre_row2 = np.empty(w, dtype=np.float64)
+    inner_row = np.empty(w, dtype=np.float64)
+    for r in range(r0 - 2, r0 + 2):
+        _ring_fill(
+            sz, depth, m, r, a, b, h, w, parallel, inv_d, inv_w, do_crease, S, D, V, EX, EY, EZ
+        )
+    _pair_rows(S, D, V, r0 - 1, a, b, h, w, parallel, inv_d, jump, up_g, up_j)
+    for r in range(r0, r1):
+        _ring_fill(
+            sz,
+            depth,
+            m,
+            r + 2,
+            a,
+            b,
+            h,
+            w,
+            parallel,
+            inv_d,
+            inv_w,
+            do_crease,
+            S,
+            D,
+            V,
+            EX,
+            EY,
+            EZ,
+        )
+        _pair_rows(S, D, V, r, a, b, h, w, parallel, inv_d, jump, cur_g, cur_j)
+        s_up, s_r, s_dn, s_dn2 = (r - 1) & 3, r & 3, (r + 1) & 3, (r + 2) & 3
+        n = b - a
+        o = a + 2  # ring index of column a
+        ins[0] = 1.0
+        ins[1] = 1.0
+        ins[2] = 1.0 if r > 0 else 0.0
+        ins[3] = 1.0 if r + 1 < h else 0.0
+        _profile_row(
+            V[s_r, o:],
+            V[s_r, o - 1 :],
+            V[s_r, o + 1 :],
+            V[s_up, o:],
+            V[s_dn, o:],
+            S[s_r, o:],
+            S[s_r, o - 1 :],
+            S[s_r, o + 1 :],
+            S[s_up, o:],
+            S[s_dn, o:],
+            cur_g[3, a:],
+            cur_g[3, a + 1 :],
+            up_g[1, a + 1 :],
+            cur_g[1, a + 1 :],
+            n,
+            ins,
+            jump,
+            prof,
+        )
+        # The image border is not an edge: the first / last column has no neighbour there.
+        for c in (0, w - 1):
+            if a <= c < b:
+                prof[c - a] = _profile_at(V, S, cur_g, up_g, r, c, h, w, jump)
+        rn = min(r + 1, h - 1)  # (a row that exists; unused where the row below does not)
+        ru = max(r - 1, 0)
+        if do_crease:
+            _turn_row(
+                V[s_r, o - 1 :],
+                V[s_r, o + 2 :],
+                EX[s_r, o - 1 :],
+                EY[s_r, o - 1 :],
+                EZ[s_r, o - 1 :],
+                EX[s_r, o:],
+                EY[s_r, o:],
+                EZ[s_r, o:],
+                EX[s_r, o + 1 :],
+                EY[s_r, o + 1 :],
+                EZ[s_r, o + 1 :],
+                EX[s_r, o + 2 :],
+                EY[s_r, o + 2 :],
+                EZ[s_r, o + 2 :],
+                n,
+                cos_min_c,
+                may_h,
+            )
+            _turn_row(
+                V[s_up, o:],
+                V[s_dn2, o:],
+                EX[s_up, o:],
+                EY[s_up, o:],
+                EZ[s_up, o:],
+                EX[s_r, o:],
+                EY[s_r, o:],
+                EZ[s_r, o:],
+                EX[s_dn, o:],
+                EY[s_dn, o:],
+                EZ[s_dn, o:],
+                EX[s_dn2, o:],
+                EY[s_dn2, o:],
+                EZ[s_dn2, o:],
+                n,
+                cos_min_c,
+                may_v,
+            )
+            _dot_row(normal[r, a:], normal[r, min(a + 1, w - 1) :], n - (1 if b == w else 0), dot_h)
+            _dot_row(normal[r, a:], normal[rn, a:], n, dot_v)
+        # The diagonal pairs of pixel c = a + i, at index i: (r - 1, c - 1) . (r + 1, c + 1)
+        # and (r - 1, c + 1) . (r + 1, c - 1), for the columns that have both.
+        c_lo, c_hi = max(a, 1), min(b, w - 1)
+        if mode != MODE_PAIRS and c_hi > c_lo:
+            nd = c_hi - c_lo
+            _dot_row(normal[ru, c_lo - 1 :], normal[rn, c_lo + 1 :], nd, dot_d1[c_lo - a :])
+            _dot_row(normal[ru, c_lo + 1 :], normal[rn, c_lo - 1 :], nd, dot_d2[c_lo - a :])
+        if do_crease:
+            _candidates_row(
+                V[s_r, o:],
+                V[s_r, o + 1 :],
+                V[s_dn, o:],
+                cur_g[3, a + 1 :],
+                cur_g[1, a + 1 :],
+                may_h,
+                may_v,
+                dot_h,
+                dot_v,
+                n,
+                jump,
+                cos_skip_c,
+                1 if b == w else 0,
+                1 if r + 1 < h else 0,
+                cand,
+            )
+        for i in range(n):
+            cre_row[i] = 0.0
+            cre_row2[i] = 0.0
+        if do_crease:
+            _crease_row(
+                sz, depth, normal, m, r, a, n, cand, prof, may_h, may_v, h, w, parallel,
+                inv_d, inv_w, jump, crease, soft, cos_min, cos_skip, two, crease2, soft2,
+                cos_min2, cos_skip2, cre_row, cre_row2,
+            )  # fmt: skip
+        if mode == MODE_PAIRS:
+            _store_row(prof, cre_row, n, out_a[r, a:], out_b[r, a:])
+            if two:
+                out_c[r, a:b] = cre_row2[:n]
+        else:
+            _edge_map_row(
+                V,
+                S,
+                dot_d1,
+                dot_d2,
+                up_j,
+                cur_j,
+                r,
+                a,
+                n,
+                mode,
+                crease,
+                soft,
+                cos_skip,
+                prof,
+                cre_row,
+                inner_row,
+                out_a[r, a:],
+                out_b[r, a:],
+            )
+        up_g, cur_g = cur_g, up_g
+        up_j, cur_j = cur_j, up_j
+
+
 @njit(parallel=True, cache=True)
 def edge_pass(
     sz,
@@ -990,7 +1216,7 @@ def edge_pass(
     With ``crease2 > 0`` (mode 0), ``out_c`` gets the signed crease ink at that second angle
     (``soft2``) too: the same as a second pass at it, for the price of one.
     """
-    h, w = sz.shape
+    h = sz.shape[0]
     cos_min = math.cos(math.radians(crease))
     cos_skip = cos_min + _COS_MARGIN
     two = crease2 > 0.0 and mode == MODE_PAIRS
@@ -1004,219 +1230,11 @@ def edge_pass(
     hi = np.empty(h, dtype=np.int64)
     _valid_spans(sz, m, lo, hi)
     for t in prange((h + _ROWS - 1) // _ROWS):
-        r0 = np.int64(t) * _ROWS
-        r1 = min(h, r0 + _ROWS)
-        # The task's span: columns within two pixels of a valid one in rows r0 - 2 .. r1 + 1.
-        a = w
-        b = np.int64(0)
-        for r in range(max(0, r0 - 2), min(h, r1 + 2)):
-            a = min(a, lo[r])
-            b = max(b, hi[r] + 1)
-        if a >= b:
-            a = b = 0
-        else:
-            a = max(0, a - 2)
-            b = min(w, b + 2)
-        for r in range(r0, r1):
-            for c in range(a):
-                out_a[r, c] = 0.0
-                out_b[r, c] = 0.0
-            for c in range(b, w):
-                out_a[r, c] = 0.0
-                out_b[r, c] = 0.0
-            if two:
-                for c in range(a):
-                    out_c[r, c] = 0.0
-                for c in range(b, w):
-                    out_c[r, c] = 0.0
-        if a >= b:
-            continue
-        up_g = np.empty((4, w + 2), dtype=np.float64)
-        up_j = np.empty((4, w + 2), dtype=np.float64)
-        cur_g = np.empty((4, w + 2), dtype=np.float64)
-        cur_j = np.empty((4, w + 2), dtype=np.float64)
-        S = np.empty((4, w + 4), dtype=np.float64)
-        D = np.empty((4, w + 4), dtype=np.float64)
-        V = np.empty((4, w + 4), dtype=np.bool_)
-        EX = np.empty((4, w + 4), dtype=np.float64)
-        EY = np.empty((4, w + 4), dtype=np.float64)
-        EZ = np.empty((4, w + 4), dtype=np.float64)
-        prof = np.empty(w, dtype=np.float64)
-        may_h = np.zeros(w, dtype=np.bool_)
-        may_v = np.zeros(w, dtype=np.bool_)
-        dot_h = np.ones(w, dtype=np.float32)
-        dot_v = np.ones(w, dtype=np.float32)
-        dot_d1 = np.ones(w, dtype=np.float32)
-        dot_d2 = np.ones(w, dtype=np.float32)
-        ins = np.empty(4, dtype=np.float64)
-        cand = np.zeros(w, dtype=np.uint8)
-        cre_row = np.empty(w, dtype=np.float64)
-        cre_row2 = np.empty(w, dtype=np.float64)
-        inner_row = np.empty(w, dtype=np.float64)
-        for r in range(r0 - 2, r0 + 2):
-            _ring_fill(
-                sz, depth, m, r, a, b, h, w, parallel, inv_d, inv_w, do_crease, S, D, V, EX, EY, EZ
-            )
-        _pair_rows(S, D, V, r0 - 1, a, b, h, w, parallel, inv_d, jump, up_g, up_j)
-        for r in range(r0, r1):
-            _ring_fill(
-                sz,
-                depth,
-                m,
-                r + 2,
-                a,
-                b,
-                h,
-                w,
-                parallel,
-                inv_d,
-                inv_w,
-                do_crease,
-                S,
-                D,
-                V,
-                EX,
-                EY,
-                EZ,
-            )
-            _pair_rows(S, D, V, r, a, b, h, w, parallel, inv_d, jump, cur_g, cur_j)
-            s_up, s_r, s_dn, s_dn2 = (r - 1) & 3, r & 3, (r + 1) & 3, (r + 2) & 3
-            n = b - a
-            o = a + 2  # ring index of column a
-            ins[0] = 1.0
-            ins[1] = 1.0
-            ins[2] = 1.0 if r > 0 else 0.0
-            ins[3] = 1.0 if r + 1 < h else 0.0
-            _profile_row(
-                V[s_r, o:],
-                V[s_r, o - 1 :],
-                V[s_r, o + 1 :],
-                V[s_up, o:],
-                V[s_dn, o:],
-                S[s_r, o:],
-                S[s_r, o - 1 :],
-                S[s_r, o + 1 :],
-                S[s_up, o:],
-                S[s_dn, o:],
-                cur_g[3, a:],
-                cur_g[3, a + 1 :],
-                up_g[1, a + 1 :],
-                cur_g[1, a + 1 :],
-                n,
-                ins,
-                jump,
-                prof,
-            )
-            # The image border is not an edge: the first / last column has no neighbour there.
-            for c in (0, w - 1):
-                if a <= c < b:
-                    prof[c - a] = _profile_at(V, S, cur_g, up_g, r, c, h, w, jump)
-            rn = min(r + 1, h - 1)  # (a row that exists; unused where the row below does not)
-            ru = max(r - 1, 0)
-            if do_crease:
-                _turn_row(
-                    V[s_r, o - 1 :],
-                    V[s_r, o + 2 :],
-                    EX[s_r, o - 1 :],
-                    EY[s_r, o - 1 :],
-                    EZ[s_r, o - 1 :],
-                    EX[s_r, o:],
-                    EY[s_r, o:],
-                    EZ[s_r, o:],
-                    EX[s_r, o + 1 :],
-                    EY[s_r, o + 1 :],
-                    EZ[s_r, o + 1 :],
-                    EX[s_r, o + 2 :],
-                    EY[s_r, o + 2 :],
-                    EZ[s_r, o + 2 :],
-                    n,
-                    cos_min_c,
-                    may_h,
-                )
-                _turn_row(
-                    V[s_up, o:],
-                    V[s_dn2, o:],
-                    EX[s_up, o:],
-                    EY[s_up, o:],
-                    EZ[s_up, o:],
-                    EX[s_r, o:],
-                    EY[s_r, o:],
-                    EZ[s_r, o:],
-                    EX[s_dn, o:],
-                    EY[s_dn, o:],
-                    EZ[s_dn, o:],
-                    EX[s_dn2, o:],
-                    EY[s_dn2, o:],
-                    EZ[s_dn2, o:],
-                    n,
-                    cos_min_c,
-                    may_v,
-                )
-                _dot_row(
-                    normal[r, a:], normal[r, min(a + 1, w - 1) :], n - (1 if b == w else 0), dot_h
-                )
-                _dot_row(normal[r, a:], normal[rn, a:], n, dot_v)
-            # The diagonal pairs of pixel c = a + i, at index i: (r - 1, c - 1) . (r + 1, c + 1)
-            # and (r - 1, c + 1) . (r + 1, c - 1), for the columns that have both.
-            c_lo, c_hi = max(a, 1), min(b, w - 1)
-            if mode != MODE_PAIRS and c_hi > c_lo:
-                nd = c_hi - c_lo
-                _dot_row(normal[ru, c_lo - 1 :], normal[rn, c_lo + 1 :], nd, dot_d1[c_lo - a :])
-                _dot_row(normal[ru, c_lo + 1 :], normal[rn, c_lo - 1 :], nd, dot_d2[c_lo - a :])
-            if do_crease:
-                _candidates_row(
-                    V[s_r, o:],
-                    V[s_r, o + 1 :],
-                    V[s_dn, o:],
-                    cur_g[3, a + 1 :],
-                    cur_g[1, a + 1 :],
-                    may_h,
-                    may_v,
-                    dot_h,
-                    dot_v,
-                    n,
-                    jump,
-                    cos_skip_c,
-                    1 if b == w else 0,
-                    1 if r + 1 < h else 0,
-                    cand,
-                )
-            for i in range(n):
-                cre_row[i] = 0.0
-                cre_row2[i] = 0.0
-            if do_crease:
-                _crease_row(
-                    sz, depth, normal, m, r, a, n, cand, prof, may_h, may_v, h, w, parallel,
-                    inv_d, inv_w, jump, crease, soft, cos_min, cos_skip, two, crease2, soft2,
-                    cos_min2, cos_skip2, cre_row, cre_row2,
-                )  # fmt: skip
-            if mode == MODE_PAIRS:
-                _store_row(prof, cre_row, n, out_a[r, a:], out_b[r, a:])
-                if two:
-                    out_c[r, a:b] = cre_row2[:n]
-            else:
-                _edge_map_row(
-                    V,
-                    S,
-                    dot_d1,
-                    dot_d2,
-                    up_j,
-                    cur_j,
-                    r,
-                    a,
-                    n,
-                    mode,
-                    crease,
-                    soft,
-                    cos_skip,
-                    prof,
-                    cre_row,
-                    inner_row,
-                    out_a[r, a:],
-                    out_b[r, a:],
-                )
-            up_g, cur_g = cur_g, up_g
-            up_j, cur_j = cur_j, up_j
+        _edge_pass_task(
+            np.int64(t), sz, depth, normal, m, parallel, inv_d, inv_w, jump, crease, soft,
+            do_crease, mode, out_a, out_b, two, crease2, soft2, out_c, lo, hi, cos_min,
+            cos_skip, cos_min_c, cos_skip_c, cos_min2, cos_skip2,
+        )  # fmt: skip
 
 
 @njit(cache=True)

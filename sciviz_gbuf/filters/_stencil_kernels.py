@@ -9,9 +9,14 @@ A plane therefore gives the same response up to a coverage border as inside: the
 creates nor hides an edge; the profile of an object against the background is drawn from the
 mask by :mod:`.edges`. Masked / non-finite centre pixels get the operator's neutral value.
 
-Rows run in parallel. Inside a row the interior columns take a branch-free path (selects only)
-that LLVM vectorises; the two border columns take the same code with their flags set. Each
-operator has its own small kernel; without a mask one all-True row stands in for it.
+Rows run in parallel. Each row is copied into buffers one column wider on each side, so its
+first and last column take the same path as the others; a row whose neighbourhoods are all
+valid skips the border rule, the others take it branch-free (selects only); LLVM vectorises
+both. Each operator has its own small kernel; without a mask one all-True row stands in for
+it. First-compile time shaped this module (``benchmarks/bench_cold_start.py``): the operator
+is inlined at two call sites only, and the border rule's and the contour codes' small helpers
+are ordinary jitted functions that LLVM inlines, not numba's (whose IR inlining was most of
+the cost).
 """
 
 from __future__ import annotations
@@ -114,7 +119,7 @@ def _grad(x, a, b, c, d, e, f, g, h, k, aux, prm):
     return _c1(x, a, b, c, d, e, f, g, h, k, aux, prm) * iso
 
 
-@njit(inline="always", cache=True)
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _range(x, a, b, c, d, e, f, g, h):
     """Smallest and largest value of the 3x3 neighbourhood (after the border rule)."""
     lo = min(min(min(a, b), min(c, d)), min(min(e, f), min(g, min(h, x))))
@@ -160,12 +165,17 @@ def _ok(v, mv, inside):
     return (v - v == 0) & inside & mv  # finite, in the image and covered
 
 
-@njit(inline="always", cache=True)
+# The border rule's helpers below are ordinary jitted functions, not inlined by numba: its
+# IR inlining copied them into each of a kernel's call sites and was most of each kernel's
+# first compile (sobel 15.6 -> 5.5 s, contour 37 -> 17 s); LLVM inlines them anyway, so the
+# output bits are the same. (The operators stay inlined: called per pixel, they must be
+# vectorised with the row loop.)
+@njit(cache=True, error_model="numpy")
 def _clamp(e):
     return min(max(e, -_FMAX), _FMAX)  # huge inputs: stay finite, never inf - inf
 
 
-@njit(inline="always", cache=True)
+@njit(cache=True, error_model="numpy")
 def _fill_axis(v, ok, opp, ok_opp, s1, ok1, s2, ok2, x, extrapolate):
     """An axis neighbour under the border rule: itself if valid; else the linear extrapolation
     ``2X - opposite``; else the mean of the two diagonal neighbours beside it (both on its
@@ -179,7 +189,7 @@ def _fill_axis(v, ok, opp, ok_opp, s1, ok1, s2, ok2, x, extrapolate):
     return x
 
 
-@njit(inline="always", cache=True)
+@njit(cache=True, error_model="numpy")
 def _fill_diag(v, ok, opp, ok_opp, p, q, x, extrapolate):
     """A diagonal neighbour: itself if valid; else ``2X - opposite``; else the plane through X
     and its two axis neighbours ``p``, ``q`` (already under the border rule): ``p + q - X``."""
@@ -193,27 +203,30 @@ def _fill_diag(v, ok, opp, ok_opp, p, q, x, extrapolate):
 
 
 @njit(inline="always", cache=True)
-def _pixel(code, op, neutral, u, mid, lo, mu, mm, ml, up, dn, c, cl, cr, lf, rt, k, aux, prm, out):
+def _pixel(code, op, neutral, u, mid, lo, mu, mm, ml, up, dn, c, k, aux, prm, out, co):
+    """Pixel ``co`` of a row under the border rule: ``u``, ``mid``, ``lo`` (and their masks)
+    are the padded rows, where it is column ``c``; ``aux`` and ``out`` are not padded."""
+    cl, cr = c - 1, c + 1
     x = mid[c]
     okx = (x - x == 0) & mm[c]
     ax = x
     if code == SUPPRESS:
-        ax = aux[c]
+        ax = aux[co]
         okx = okx & (ax - ax == 0)
     elif code >= CONTOUR:
-        ax = aux[c]
+        ax = aux[co]
     # Min/max (Eq. 3, 4) take the neighbourhood as it is; differentials extrapolate.
     ext = code != NORMALIZE and code != SUPPRESS
     a0, b0, c0, d0 = u[cl], u[c], u[cr], mid[cl]
     e0, f0, g0, h0 = mid[cr], lo[cl], lo[c], lo[cr]
-    oka = _ok(a0, mu[cl], up & lf)
+    oka = _ok(a0, mu[cl], up)
     okb = _ok(b0, mu[c], up)
-    okc = _ok(c0, mu[cr], up & rt)
-    okd = _ok(d0, mm[cl], lf)
-    oke = _ok(e0, mm[cr], rt)
-    okf = _ok(f0, ml[cl], dn & lf)
+    okc = _ok(c0, mu[cr], up)
+    okd = _ok(d0, mm[cl], True)
+    oke = _ok(e0, mm[cr], True)
+    okf = _ok(f0, ml[cl], dn)
     okg = _ok(g0, ml[c], dn)
-    okh = _ok(h0, ml[cr], dn & rt)
+    okh = _ok(h0, ml[cr], dn)
     # Layout: a b c / d x e / f g h. Axis neighbours first, then diagonals from them, so
     # that a neighbour missing together with its opposite one (a corner of a hole, or of the
     # image next to a hole) still continues the plane.
@@ -226,10 +239,10 @@ def _pixel(code, op, neutral, u, mid, lo, mu, mm, ml, up, dn, c, cl, cr, lf, rt,
     f = _fill_diag(f0, okf, c0, okc, d, g, x, ext)
     hh = _fill_diag(h0, okh, a0, oka, e, g, x, ext)
     v = op(x, a, b, cc, d, e, f, g, hh, k, ax, prm)
-    out[c] = v if okx else neutral
+    out[co] = v if okx else neutral
 
 
-@njit(inline="always", cache=True)
+@njit(cache=True, error_model="numpy")
 def _rows_valid(code, u, mid, lo, mu, mm, ml, xr, masked):
     """True if three rows (and the aux row, for Eq. 4) are finite and covered throughout.
 
@@ -255,17 +268,54 @@ def _rows_valid(code, u, mid, lo, mu, mm, ml, xr, masked):
 _BLOCK = 256
 
 
+@njit(cache=True, error_model="numpy")
+def _pad_row(src, out, fill):
+    """``out[1:w + 1] = src``, ``out[0] = out[w + 1] = fill``."""
+    w = src.shape[0]
+    out[0] = fill
+    out[w + 1] = fill
+    for c in range(w):
+        out[c + 1] = src[c]
+
+
+@njit(cache=True, error_model="numpy")
+def _edge_columns(u, mid, lo, pu, pm, pl, ext):
+    """The outer columns of the padded rows of a row whose pixels are all valid: each holds,
+    for the image column next to it, the border rule's value of that missing neighbour (the
+    linear extrapolation ``2X - opposite``; X itself for the min/max operators)."""
+    w = mid.shape[0]
+    x0, x1 = mid[0], mid[w - 1]
+    if ext:
+        pu[0] = _clamp(x0 + (x0 - lo[1]))
+        pm[0] = _clamp(x0 + (x0 - mid[1]))
+        pl[0] = _clamp(x0 + (x0 - u[1]))
+        pu[w + 1] = _clamp(x1 + (x1 - lo[w - 2]))
+        pm[w + 1] = _clamp(x1 + (x1 - mid[w - 2]))
+        pl[w + 1] = _clamp(x1 + (x1 - u[w - 2]))
+    else:
+        pu[0] = pm[0] = pl[0] = x0
+        pu[w + 1] = pm[w + 1] = pl[w + 1] = x1
+
+
 @njit(inline="always", cache=True)
 def _rows(code, op, img, m, k, aux, prm, out):
     """Apply operator ``op`` (of kind ``code``) to every pixel; ``m`` is the (H, W) mask or
     one all-True row; ``prm`` holds the parameters of the contour codes.
 
     Inlined into one small kernel per operator with ``code`` a constant and ``op`` a known
-    function, so LLVM folds the switches away and vectorises the interior loop.
+    function, so LLVM folds the switches away and vectorises the column loops. The three rows
+    are copied into buffers one column wider on each side, so that the image's first and last
+    column take the same path as the others: the operator is inlined at two call sites (each
+    one more copy to compile; three of them were most of a first run's compile time). A row
+    whose neighbourhoods are all valid skips the border rule, its outer columns holding what
+    the rule gives there (:func:`_edge_columns`); any other row takes it, with uncovered
+    outer columns.
     """
     h, w = img.shape
     neutral = np.float32(1.0) if code == DIAG_DEPTH else np.float32(0.0)
     masked = m.shape[0] > 1
+    ext = code != NORMALIZE and code != SUPPRESS
+    zero = np.float32(0.0)
     for r in prange(h):
         r = np.int64(r)
         up = r > 0
@@ -279,76 +329,30 @@ def _rows(code, op, img, m, k, aux, prm, out):
             mu, mm, ml = m[0], m[0], m[0]
         xr = aux[r] if aux.shape[0] > 1 else aux[0]
         o = out[r]
-        if up & dn & _rows_valid(code, u, mid, lo, mu, mm, ml, xr, masked):
+        pu = np.empty(w + 2, dtype=np.float32)
+        pm = np.empty(w + 2, dtype=np.float32)
+        pl = np.empty(w + 2, dtype=np.float32)
+        _pad_row(u, pu, zero)
+        _pad_row(mid, pm, zero)
+        _pad_row(lo, pl, zero)
+        if (w >= 2) & up & dn & _rows_valid(code, u, mid, lo, mu, mm, ml, xr, masked):
             # Every neighbour is valid: the border rule is the identity, so skip it.
-            for c in range(1, w - 1):
-                ax = xr[c] if code >= SUPPRESS else mid[c]
-                o[c] = op(
-                    mid[c],
-                    u[c - 1],
-                    u[c],
-                    u[c + 1],
-                    mid[c - 1],
-                    mid[c + 1],
-                    lo[c - 1],
-                    lo[c],
-                    lo[c + 1],
-                    k,
-                    ax,
-                    prm,
-                )
-        else:
-            for c in range(1, w - 1):
-                _pixel(
-                    code,
-                    op,
-                    neutral,
-                    u,
-                    mid,
-                    lo,
-                    mu,
-                    mm,
-                    ml,
-                    up,
-                    dn,
-                    c,
-                    c - 1,
-                    c + 1,
-                    True,
-                    True,
-                    k,
-                    xr,
-                    prm,
-                    o,
-                )
-        # The first and last column, at one call site (rather than two) of the large inlined
-        # _pixel: a third less to compile, and these columns are a tiny share of the work.
-        for t in range(min(w, 2)):
-            c = 0 if t == 0 else w - 1
-            lf = c > 0
-            rt = c < w - 1
-            _pixel(
-                code,
-                op,
-                neutral,
-                u,
-                mid,
-                lo,
-                mu,
-                mm,
-                ml,
-                up,
-                dn,
-                c,
-                c - 1 if lf else c,
-                c + 1 if rt else c,
-                lf,
-                rt,
-                k,
-                xr,
-                prm,
-                o,
-            )
+            _edge_columns(u, mid, lo, pu, pm, pl, ext)
+            for c in range(1, w + 1):
+                ax = xr[c - 1] if code >= SUPPRESS else pm[c]
+                o[c - 1] = op(
+                    pm[c], pu[c - 1], pu[c], pu[c + 1], pm[c - 1], pm[c + 1], pl[c - 1], pl[c],
+                    pl[c + 1], k, ax, prm,
+                )  # fmt: skip
+            continue
+        qu = np.empty(w + 2, dtype=np.bool_)
+        qm = np.empty(w + 2, dtype=np.bool_)
+        ql = np.empty(w + 2, dtype=np.bool_)
+        _pad_row(mu, qu, False)  # a (1, W) mask is that row's own (an image one row high)
+        _pad_row(mm, qm, False)
+        _pad_row(ml, ql, False)
+        for c in range(1, w + 1):
+            _pixel(code, op, neutral, pu, pm, pl, qu, qm, ql, up, dn, c, k, xr, prm, o, c - 1)
 
 
 @njit(parallel=True, cache=True)

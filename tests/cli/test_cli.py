@@ -224,3 +224,39 @@ def test_topo_geographic_and_projected_flags(tmp_path, capsys):
     assert not np.array_equal(outs["--geographic"], outs["--projected"])
     with pytest.raises(SystemExit):
         main(["topo", str(asc), "-o", str(tmp_path / "x.png"), "--geographic", "--projected"])
+
+
+def test_the_command_line_loads_no_heavy_library_before_its_first_line():
+    # The first line of a long command comes before VTK, PyVista and numba load (they take
+    # seconds): importing the CLI and the package imports none of them.
+    code = (
+        "import sys, sciviz_gbuf, sciviz_gbuf.cli\n"
+        "print(sorted(m for m in ('vtk', 'pyvista', 'numba', 'matplotlib') if m in sys.modules))"
+    )
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert r.stdout.strip() == "[]"
+
+
+def test_a_long_command_says_it_is_starting_first(capsys, tmp_path):
+    a_file = tmp_path / "a_file"
+    a_file.write_text("not a folder")
+    assert main(["demo", "--progress", "-o", str(a_file)]) == 2
+    lines = capsys.readouterr().err.splitlines()
+    assert lines[0] == "sciviz-gbuf demo: starting (loading VTK, PyVista and numba) ..."
+    assert lines[-1] == (
+        f"sciviz-gbuf demo: error: output: {str(a_file)!r} is a file; expected a folder "
+        "(new or existing)"
+    )
+    assert len(lines) == 2 and a_file.read_text() == "not a folder"
+    assert main(["demo", "--no-progress", "-o", str(a_file)]) == 2
+    assert "starting" not in capsys.readouterr().err
+
+
+def test_the_package_exports_resolve_lazily():
+    import sciviz_gbuf as sg
+
+    for name in sg.__all__:
+        assert getattr(sg, name) is not None
+    assert sg.filters.contour_lines is not None and "capture" in dir(sg)
+    with pytest.raises(AttributeError):
+        _ = sg.no_such_name
