@@ -1,4 +1,7 @@
-"""Capture the G-buffers of PyVista's nut and write each channel as a PNG.
+"""Capture the G-buffers of a mesh
+===============================
+
+Capture the G-buffers of PyVista's nut and write each channel as a PNG.
 
 Shows the basic workflow: one offscreen capture (:func:`sciviz_gbuf.capture`, default iso
 view) gives depth, Saito's ``sz``, normals, world coordinates and ids, which

@@ -1,4 +1,7 @@
-"""Saito & Takahashi (1990) Fig. 11: a plan-view topographic map of the Jacksboro fault DEM.
+"""Fig. 11: a plan-view topographic map
+====================================
+
+Saito & Takahashi (1990) Fig. 11: a plan-view topographic map of the Jacksboro fault DEM.
 
 A plan view needs no rendering: the DEM grid is the G-buffer. The bundled DEM (whole metres
 on a 74.6 x 92.5 m grid) is lightly smoothed and resampled to square 20 m pixels, north up,

@@ -1,4 +1,7 @@
-"""The 1990 Fig. 12 (bird's-eye maps) and Fig. 13 (a sumi-e) on the bundled Jacksboro DEM.
+"""Figs. 12 and 13: bird's-eye maps and a sumi-e
+=============================================
+
+The 1990 Fig. 12 (bird's-eye maps) and Fig. 13 (a sumi-e) on the bundled Jacksboro DEM.
 
 The terrain is rendered once; the contour image ``cn`` (of the true height), the profile image
 ``pr`` (from ``sz``), ``mx2`` (profiles + relief) and ``mx4`` (profiles + contours + relief +

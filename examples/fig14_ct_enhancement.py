@@ -1,4 +1,7 @@
-"""Saito & Takahashi 1990 Fig. 14: a CT bone surface, conventional (a) and enhanced (b).
+"""Fig. 14: an enhanced CT bone surface
+====================================
+
+Saito & Takahashi 1990 Fig. 14: a CT bone surface, conventional (a) and enhanced (b).
 
 Without arguments beyond the output folder this uses PyVista's bundled segmented frog (its
 skeleton label, smoothed and cut at 0.5); give a DICOM CT series folder as the second argument

@@ -1,4 +1,7 @@
-"""Saito & Takahashi 1990 Fig. 15: surface analysis of Bezier patches.
+"""Fig. 15: surface analysis of Bezier patches
+===========================================
+
+Saito & Takahashi 1990 Fig. 15: surface analysis of Bezier patches.
 
 Without a patch file this builds the paper's surface in code: two bicubic patches joined with
 C1 (not C2) continuity, and the same with a C2 join; each is rendered once and shown as contour

@@ -1,4 +1,7 @@
-"""Saito & Takahashi (1990) Fig. 3 on PyVista's machine nut: edge drawing from the depth image.
+"""Fig. 3: edge drawing from the depth image
+=========================================
+
+Saito & Takahashi (1990) Fig. 3 on PyVista's machine nut: edge drawing from the depth image.
 
 The nut is seen obliquely from above, its axis upright, so the top face, its chamfer and the
 hole show as in the paper. One capture gives Saito's perspective depth ``sz`` (Eq. 6); the

@@ -1,4 +1,7 @@
-"""Saito & Takahashi (1990) Fig. 5 (and Fig. 4): contour lines of ``s = x y`` without tracking.
+"""Figs. 4 and 5: contour lines without tracking
+=============================================
+
+Saito & Takahashi (1990) Fig. 5 (and Fig. 4): contour lines of ``s = x y`` without tracking.
 
 Every pixel gets ink from its own value ``s`` and the Eq. 9 gradient ``g`` of the field there:
 ``|s - p| / g`` is its distance in pixels to the level ``p``, and a line profile ``f1`` turns

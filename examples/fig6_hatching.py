@@ -1,4 +1,7 @@
-"""Saito & Takahashi (1990) Fig. 6: curved hatching of ``s = x y``.
+"""Fig. 6: curved hatching
+=======================
+
+Saito & Takahashi (1990) Fig. 6: curved hatching of ``s = x y``.
 
 Contour lines at a regular interval are too sparse where the gradient is small and too dense
 where it is large: unusable as hatching. Curved hatching (Eq. 17-21, "binary thinning out")

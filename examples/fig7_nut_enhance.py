@@ -1,4 +1,7 @@
-"""Saito & Takahashi (1990) Fig. 7 on PyVista's machine nut: edge enhancement of a shaded image.
+"""Fig. 7: edge enhancement of a shaded image
+==========================================
+
+Saito & Takahashi (1990) Fig. 7 on PyVista's machine nut: edge enhancement of a shaded image.
 
 (a) a Lambert shade from the G-buffer's normals, light from the upper left; (b) the depth
 (``sz``) image; (c) the edge image: convex internal edges white, concave edges and profiles

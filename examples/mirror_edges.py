@@ -1,4 +1,7 @@
-"""Nienhaus & Döllner (2003) §5, Fig. 8: an edge-enhanced scene with a planar mirror.
+"""2003 Fig. 8: edges in a mirror
+==============================
+
+Nienhaus & Döllner (2003) §5, Fig. 8: an edge-enhanced scene with a planar mirror.
 
 PyVista's machine nut and a ball stand in front of an upright rectangular mirror. The scene is
 captured twice, from the camera and from the camera reflected about the mirror plane (without

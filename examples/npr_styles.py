@@ -1,4 +1,7 @@
-"""NPR styles on PyVista's nut and a parametric torus, and the 1990 Fig. 10 photocopy test.
+"""NPR styles and the Fig. 10 photocopy test
+=========================================
+
+NPR styles on PyVista's nut and a parametric torus, and the 1990 Fig. 10 photocopy test.
 
 Nienhaus & Döllner 2003 §5: technical illustration (Gooch shading + edge map), cartoon shading
 (hard and smoothed transitions) and halftone hatching; Saito & Takahashi 1990 Fig. 9: the line

@@ -1,4 +1,7 @@
-"""A bird's-eye G-buffer of real terrain: the Jacksboro fault DEM seen from the south-east.
+"""A bird's-eye G-buffer of real terrain
+=====================================
+
+A bird's-eye G-buffer of real terrain: the Jacksboro fault DEM seen from the south-east.
 
 The DEM (Matplotlib's sample data) becomes a surface in metres with north at +y
 (:func:`sciviz_gbuf.datasets.load_jacksboro_terrain`, vertical exaggeration 2), a perspective

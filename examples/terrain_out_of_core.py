@@ -1,4 +1,7 @@
-"""An out-of-core topographic map: a DEM mapped chunk by chunk on dask into a Cloud-Optimised
+"""An out-of-core topographic map on dask
+======================================
+
+An out-of-core topographic map: a DEM mapped chunk by chunk on dask into a Cloud-Optimised
 GeoTIFF with a PNG overview, never held whole (the pixels equal the in-memory map's).
 
 The DEM is synthetic (generated chunk by chunk, 30 m cells); pass a GeoTIFF/VRT/.hgt to map

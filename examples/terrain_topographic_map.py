@@ -1,4 +1,7 @@
-"""A plan-view topographic map of the bundled Jacksboro DEM, as PNG and georeferenced GeoTIFF.
+"""A topographic map as PNG and GeoTIFF
+====================================
+
+A plan-view topographic map of the bundled Jacksboro DEM, as PNG and georeferenced GeoTIFF.
 
 Colour bands per major interval, a GDAL-compatible relief with cast shadows and a sky-view term,
 and major/minor contour lines (automatic intervals: 200 m / 40 m here, majors at least 6 px

@@ -42,7 +42,7 @@ __all__ = [
 
 
 #: Upper bounds of the size-like parameters, one table for the Python API, the command line and
-#: the explorer (documented in the README's "Limits"). Each is refused with an InputError
+#: the explorer (documented in docs/limits.md). Each is refused with an InputError
 #: before any allocation.
 LIMITS: dict[str, float] = {
     "line_width": 64.0,  # px: edge, contour, hatch, stroke and profile line widths

@@ -1,4 +1,4 @@
-"""Old import path of :func:`sciviz_gbuf.core.isosurface.isosurface` (shown in the README)."""
+"""Old import path of :func:`sciviz_gbuf.core.isosurface.isosurface` (shown in docs/medical.md)."""
 
 from .core.isosurface import isosurface
 
