@@ -56,26 +56,39 @@ with open(sys.argv[1], "w") as f:
 """
 
 
-def run(cmd: list[str], cache: str) -> dict:
-    """One command in a fresh interpreter with ``cache`` as numba's cache; its record."""
+def run(cmd: list[str], cache: str, second: bool = True) -> dict:
+    """One command in a fresh interpreter with ``cache`` as numba's cache; its record, with
+    the seconds to the first line on stderr (``first``: the command's --progress)."""
     with tempfile.NamedTemporaryFile(suffix=".json", delete=False) as f:
         out = f.name
     env = {**os.environ, "NUMBA_CACHE_DIR": cache}
+    env.pop("SCIVIZ_GBUF_NO_WARMUP", None)
+    if not second:
+        env["SCIVIZ_GBUF_NO_WARMUP"] = "1"  # no second process compiling on the other core
     t0 = time.perf_counter()
-    proc = subprocess.run(
+    proc = subprocess.Popen(
         [sys.executable, "-c", _CHILD, out, *cmd],
         env=env,
         stdin=subprocess.DEVNULL,
-        capture_output=True,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
         text=True,
     )
+    first = None
+    err = []
+    for line in proc.stderr:
+        if first is None:
+            first = time.perf_counter() - t0
+        err.append(line)
+    rc = proc.wait()
     total = time.perf_counter() - t0
-    if proc.returncode != 0:
-        raise SystemExit(f"{' '.join(cmd)} failed: {proc.stderr.strip()[-500:]}")
+    if rc != 0:
+        raise SystemExit(f"{' '.join(cmd)} failed: {''.join(err).strip()[-500:]}")
     with open(out) as f:
         rec = json.load(f)
     os.unlink(out)
     rec["total"] = total  # with the interpreter start and the imports
+    rec["first"] = first
     return rec
 
 
@@ -92,32 +105,38 @@ def main() -> None:
     args = ap.parse_args()
     work = tempfile.mkdtemp(prefix="sciviz_cold_")
     jobs = {
-        "demo": ["demo", "-o", os.path.join(work, "demo"), "--no-progress"],
-        "topo": ["topo", "-o", os.path.join(work, "topo.png"), "--no-progress"],
+        "demo": ["demo", "-o", os.path.join(work, "demo"), "--progress"],
+        "topo": ["topo", "-o", os.path.join(work, "topo.png"), "--progress"],
     }
     if args.only:
         jobs = {args.only: jobs[args.only]}
     goals = {"demo": 60.0, "topo": 20.0}
-    print(f"{'command':8s} {'cold s':>8s} {'compile s':>10s} {'share':>6s} {'warm s':>8s} "
-          f"{'cold/warm':>9s} {'goal s':>7s}")  # fmt: skip
+    head = ["cold s", "1st line", "compile", "share", "1 proc s", "2 vs 1", "warm s", "cold/warm"]
+    print(f"{'command':8s} " + " ".join(f"{h:>8s}" for h in [*head, "goal s"]))
     tops = {}
     for name, cmd in jobs.items():
         cache = tempfile.mkdtemp(prefix="numba_", dir=work)
         cold = run(cmd, cache)
         warm = run(cmd, cache)
+        alone = run(cmd, tempfile.mkdtemp(prefix="numba_", dir=work), second=False)
         comp = _outermost(cold["events"])
         print(
-            f"{name:8s} {cold['total']:8.1f} {comp:10.1f} {comp / cold['total']:6.0%} "
-            f"{warm['total']:8.1f} {cold['total'] / warm['total']:9.1f} {goals[name]:7.0f}"
+            f"{name:8s} {cold['total']:8.1f} {cold['first'] or float('nan'):8.2f} {comp:8.1f} "
+            f"{comp / cold['total']:8.0%} {alone['total']:8.1f} "
+            f"{cold['total'] / alone['total']:8.2f} {warm['total']:8.1f} "
+            f"{cold['total'] / warm['total']:8.1f} {goals[name]:8.0f}"
         )
         per: dict[str, float] = {}
-        for fn, dt, _ in cold["events"]:
+        for fn, dt, _ in alone["events"]:
             per[fn] = per.get(fn, 0.0) + dt
         tops[name] = sorted(per.items(), key=lambda kv: -kv[1])[: args.top]
-    print("cold / warm: the whole process (interpreter, imports, the command); compile: the")
-    print("numba:compile events of the cold run, nested ones counted once")
+    print("cold / 1 proc / warm: the whole process (interpreter, imports, the command), cold")
+    print("with the second process compiling on the other core (apps.warmup), 1 proc without;")
+    print("1st line: seconds to the first line on stderr; compile: the numba:compile events of")
+    print("the cold run's own process, nested ones counted once")
     for name, top in tops.items():
-        print(f"\nlongest compiles of the cold {name} (s, all signatures, callees included):")
+        print(f"\nlongest compiles of the cold {name}, one process (s, all signatures, callees"
+              " included):")  # fmt: skip
         for fn, dt in top:
             print(f"  {dt:7.1f}  {fn}")
     print(json.dumps({"work": work}))

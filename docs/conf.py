@@ -44,7 +44,7 @@ html_theme = "furo"
 html_title = f"sciviz-gbuf {release}"
 html_static_path = ["_static"]
 
-autodoc_default_options = {"members": True, "show-inheritance": False}
+autodoc_default_options = {"members": True}
 autodoc_typehints = "none"  # numpydoc's Parameters sections carry the types
 autodoc_member_order = "bysource"
 autosummary_generate = False
@@ -64,4 +64,5 @@ sphinx_gallery_conf = {
     "within_subsection_order": "FileNameSortKey",
     "capture_repr": (),
     "show_memory": False,
+    "run_stale_examples": True,  # every build runs every example (the tests rely on it)
 }

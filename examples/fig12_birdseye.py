@@ -47,6 +47,6 @@ def main(outdir: Path) -> list[Path]:
 
 
 if __name__ == "__main__":
-    default = Path(__file__).resolve().parent / "output"
+    default = Path(sys.argv[0]).resolve().parent / "output"
     for path in main(Path(sys.argv[1]) if len(sys.argv) > 1 else default):
         print(path)

@@ -48,6 +48,6 @@ def main(outdir: Path, bpt: str | None = None) -> list[Path]:
 
 
 if __name__ == "__main__":
-    out = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).parent / "output"
+    out = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(sys.argv[0]).resolve().parent / "output"
     for path in main(out, sys.argv[2] if len(sys.argv) > 2 else None):
         print(path)

@@ -34,5 +34,5 @@ def main(outdir: Path) -> Path:
 
 
 if __name__ == "__main__":
-    default = Path(__file__).resolve().parent / "output"
+    default = Path(sys.argv[0]).resolve().parent / "output"
     print(main(Path(sys.argv[1]) if len(sys.argv) > 1 else default))

@@ -44,6 +44,6 @@ def main(outdir: Path, dem_file: str | None = None, cluster: bool = False) -> li
 
 if __name__ == "__main__":
     args = [a for a in sys.argv[1:] if a != "--dask"]
-    out = Path(args[0]) if args else Path(__file__).with_name("output")
+    out = Path(args[0]) if args else Path(sys.argv[0]).resolve().with_name("output")
     for path in main(out, args[1] if len(args) > 1 else None, "--dask" in sys.argv):
         print(path)

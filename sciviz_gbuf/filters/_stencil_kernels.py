@@ -243,8 +243,9 @@ def _pixel(code, op, neutral, u, mid, lo, mu, mm, ml, up, dn, c, k, aux, prm, ou
 
 
 @njit(cache=True, error_model="numpy")
-def _rows_valid(code, u, mid, lo, mu, mm, ml, xr, masked):
-    """True if three rows (and the aux row, for Eq. 4) are finite and covered throughout.
+def _rows_valid(with_aux, u, mid, lo, mu, mm, ml, xr, masked):
+    """True if three rows (and the aux row ``xr`` if ``with_aux``: Eq. 4) are finite and
+    covered throughout.
 
     Checked in blocks, so a row that meets the background early (most rows of a G-buffer)
     costs one block, not a scan of the whole row."""
@@ -257,7 +258,7 @@ def _rows_valid(code, u, mid, lo, mu, mm, ml, xr, masked):
                 bad |= not (mu[c] & mm[c] & ml[c])
         for c in range(c0, c1):
             bad |= not ((u[c] - u[c] == 0) & (mid[c] - mid[c] == 0) & (lo[c] - lo[c] == 0))
-        if code == SUPPRESS:
+        if with_aux:
             for c in range(c0, c1):
                 bad |= not (xr[c] - xr[c] == 0)
         if bad:
@@ -315,6 +316,8 @@ def _rows(code, op, img, m, k, aux, prm, out):
     neutral = np.float32(1.0) if code == DIAG_DEPTH else np.float32(0.0)
     masked = m.shape[0] > 1
     ext = code != NORMALIZE and code != SUPPRESS
+    # A typed flag, not the literal: one compiled _rows_valid serves every kernel.
+    with_aux = np.bool_(code == SUPPRESS)
     zero = np.float32(0.0)
     for r in prange(h):
         r = np.int64(r)
@@ -335,7 +338,7 @@ def _rows(code, op, img, m, k, aux, prm, out):
         _pad_row(u, pu, zero)
         _pad_row(mid, pm, zero)
         _pad_row(lo, pl, zero)
-        if (w >= 2) & up & dn & _rows_valid(code, u, mid, lo, mu, mm, ml, xr, masked):
+        if (w >= 2) & up & dn & _rows_valid(with_aux, u, mid, lo, mu, mm, ml, xr, masked):
             # Every neighbour is valid: the border rule is the identity, so skip it.
             _edge_columns(u, mid, lo, pu, pm, pl, ext)
             for c in range(1, w + 1):
