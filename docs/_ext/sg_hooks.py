@@ -37,7 +37,7 @@ def png_scraper(block, block_vars: dict, gallery_conf: dict, **kwargs) -> str:
     montages = [p for p in new if "montage" in p.name]
     chosen = (montages or new)[:MAX_PICTURES]
     paths = []
-    for src, dest in zip(chosen, block_vars["image_path_iterator"]):
+    for src, dest in zip(chosen, block_vars["image_path_iterator"], strict=False):
         shutil.copyfile(src, dest)
         paths.append(dest)
     return figure_rst(paths, gallery_conf["src_dir"])
