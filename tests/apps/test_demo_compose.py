@@ -523,5 +523,22 @@ def test_numba_cache_is_cold_looks_where_numba_keeps_its_cache(tmp_path, monkeyp
     assert numba_cache_is_cold()
     deep = tmp_path / "work" / "sciviz_gbuf" / "filters"
     deep.mkdir(parents=True)
-    (deep / "_edge_kernels.edge_pass-1021.py311.nbi").write_bytes(b"")
+    (deep / "_edge_kernels._edge_pass_tasks-988.py311.nbi").write_bytes(b"")
     assert not numba_cache_is_cold()
+
+
+@pytest.mark.parametrize("job", ["demo", "all", "topo"])
+def test_cold_markers_name_cached_kernels_the_job_compiles(job):
+    """A marker that names no cached numba kernel (a kernel renamed or turned into a Python
+    wrapper) would make every run look like a first one."""
+    import importlib
+
+    from numba.core.caching import NullCache
+    from numba.core.dispatcher import Dispatcher
+
+    from sciviz_gbuf.apps.warmup import COLD_MARKERS
+
+    module, name = COLD_MARKERS[job].split(".")
+    kernel = getattr(importlib.import_module(f"sciviz_gbuf.filters.{module}"), name)
+    assert isinstance(kernel, Dispatcher), f"{COLD_MARKERS[job]} is not a numba kernel"
+    assert not isinstance(kernel._cache, NullCache), f"{COLD_MARKERS[job]} is not cache=True"
