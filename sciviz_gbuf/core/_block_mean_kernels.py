@@ -3,18 +3,15 @@
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
-
-from .bands import run_bands
+from numba import njit, prange
 
 __all__ = ["block_mean"]
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
-def _block_mean_rows(r0, r1, src, k, out):
-    """Output rows ``r0 .. r1`` of :func:`block_mean` (one band of :func:`.run_bands`)."""
-    w, c = out.shape[1], out.shape[2]
-    for r in range(r0, r1):
+@njit(parallel=True, cache=True)
+def _block_mean(src, k, out):
+    h, w, c = out.shape
+    for r in prange(h):
         for col in range(w):
             for ch in range(c):
                 # float64 sums: a 4x4 block of float32 samples averages without round-off drift
@@ -38,5 +35,5 @@ def block_mean(image: np.ndarray, k: int, shape: tuple[int, int]) -> np.ndarray:
     src = img.reshape(*img.shape[:2], -1)[: h * k, : w * k]
     src = np.ascontiguousarray(src, dtype=np.float32)
     out = np.empty((h, w, src.shape[2]), dtype=np.float32)
-    run_bands(_block_mean_rows, h, src, k, out)
+    _block_mean(src, k, out)
     return out.reshape(h, w, *img.shape[2:])

@@ -15,6 +15,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from ..errors import InputError
 from ..filters.edges import INNER_COLOR, PROFILE_COLOR
 from . import _fused_kernels as _fk
 from .hatch import HALO_CORE, HATCH_ANGLES, HATCH_MAX_INK, HATCH_SPACING, family_thresholds
@@ -125,6 +126,21 @@ def fused_style(
     (H, W, 3) uint8 RGB
     """
     style = check_style(style, "explore")
+    if style in ("lines", "hatch") and layer is None:
+        # The kernel reads the layer at every pixel of these styles: without one it would
+        # read past an empty array.
+        raise InputError(f"layer: style {style!r} needs its (H, W) ink layer, got None")
+    h, w = np.shape(mask)[:2]
+    for name, a, tail in (
+        ("normal", normal, (3,)), ("layer", layer, ()), ("emap", emap, (4,)),
+        ("tint", tint, (3,)), ("ink", ink, ()), ("out", out, (3,)),
+    ):  # fmt: skip
+        if a is not None and tuple(np.shape(a)) != (h, w, *tail):
+            raise InputError(
+                f"{name}: expected shape {(h, w, *tail)} (the mask's), got {tuple(np.shape(a))}"
+            )
+    if out is not None and np.asarray(out).dtype != np.uint8:
+        raise InputError(f"out: expected a uint8 RGB array, got dtype {np.asarray(out).dtype}")
     c = FUSED_CONSTANTS
     zero3 = np.zeros(3, np.float32)
     inner, prof = c["edge_colors"].get(style, (zero3, zero3)) if emap is not None else (zero3,) * 2
