@@ -131,14 +131,18 @@ def fused_style(
         # read past an empty array.
         raise InputError(f"layer: style {style!r} needs its (H, W) ink layer, got None")
     h, w = np.shape(mask)[:2]
-    for name, a, tail in (
-        ("normal", normal, (3,)), ("layer", layer, ()), ("emap", emap, (4,)),
-        ("tint", tint, (3,)), ("ink", ink, ()), ("out", out, (3,)),
+    # (name, array, channels: 0 for an (H, W) image, else at least that many)
+    for name, a, ch in (
+        ("normal", normal, 3), ("layer", layer, 0), ("emap", emap, 4), ("tint", tint, 3),
+        ("ink", ink, 0), ("out", out, 3),
     ):  # fmt: skip
-        if a is not None and tuple(np.shape(a)) != (h, w, *tail):
-            raise InputError(
-                f"{name}: expected shape {(h, w, *tail)} (the mask's), got {tuple(np.shape(a))}"
-            )
+        if a is None:
+            continue
+        shape = tuple(np.shape(a))
+        ok = shape == (h, w) if ch == 0 else len(shape) == 3 and shape[:2] == (h, w)
+        if not ok or (ch and shape[2] < ch):
+            want = f"({h}, {w})" if ch == 0 else f"({h}, {w}, >={ch})"
+            raise InputError(f"{name}: expected shape {want} (the mask's), got {shape}")
     if out is not None and np.asarray(out).dtype != np.uint8:
         raise InputError(f"out: expected a uint8 RGB array, got dtype {np.asarray(out).dtype}")
     c = FUSED_CONSTANTS

@@ -32,6 +32,7 @@ def test_a_style_that_reads_the_layer_refuses_none(style):
         ({"layer": np.zeros((5, 5), np.float32)}, "layer"),
         ({"emap": np.zeros((24, 32, 3), np.float32)}, "emap"),
         ({"tint": np.zeros((24, 31, 3), np.float32)}, "tint"),
+        ({"tint": np.zeros((24, 32, 2), np.float32)}, "tint"),
         ({"ink": np.zeros((23, 32), np.float32)}, "ink"),
         ({"out": np.zeros((24, 32, 3), np.float32)}, "out"),
     ],
