@@ -27,8 +27,8 @@ __all__ = ["COLD_MARKERS", "JOBS", "main", "numba_cache_is_cold", "run_steps", "
 
 #: The kernel whose cache index tells a first run, per job: one that every run of it calls.
 COLD_MARKERS = {
-    "demo": "_edge_kernels.edge_pass",
-    "all": "_edge_kernels.edge_pass",
+    "demo": "_edge_kernels._edge_pass_tasks",
+    "all": "_edge_kernels._edge_pass_tasks",
     "topo": "_stencil_kernels._k_contour",
 }
 

@@ -3,15 +3,18 @@
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
+
+from .bands import run_bands
 
 __all__ = ["block_mean"]
 
 
-@njit(parallel=True, cache=True)
-def _block_mean(src, k, out):
-    h, w, c = out.shape
-    for r in prange(h):
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _block_mean_rows(r0, r1, src, k, out):
+    """Output rows ``r0 .. r1`` of :func:`block_mean` (one band of :func:`.run_bands`)."""
+    w, c = out.shape[1], out.shape[2]
+    for r in range(r0, r1):
         for col in range(w):
             for ch in range(c):
                 # float64 sums: a 4x4 block of float32 samples averages without round-off drift
@@ -35,5 +38,5 @@ def block_mean(image: np.ndarray, k: int, shape: tuple[int, int]) -> np.ndarray:
     src = img.reshape(*img.shape[:2], -1)[: h * k, : w * k]
     src = np.ascontiguousarray(src, dtype=np.float32)
     out = np.empty((h, w, src.shape[2]), dtype=np.float32)
-    _block_mean(src, k, out)
+    run_bands(_block_mean_rows, h, src, k, out)
     return out.reshape(h, w, *img.shape[2:])

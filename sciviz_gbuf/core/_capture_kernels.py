@@ -10,7 +10,9 @@ as a perspective-correct rasteriser would, but without its float32 round-off.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
+
+from .bands import run_bands
 
 __all__ = [
     "accumulate_codes",
@@ -27,12 +29,17 @@ __all__ = [
 _MAX_OVERSHOOT = 0.5
 
 
-@njit(parallel=True, cache=True)
 def accumulate_codes(px, shift, out):
     """OR the 24-bit RGB codes of a bottom-up (H, W, 3) uint8 readback into ``out`` (row 0 on
     top), shifted left by ``shift`` bits."""
+    run_bands(_codes_rows, out.shape[0], px, shift, out)
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _codes_rows(r0, r1, px, shift, out):
+    """Rows ``r0 .. r1`` of :func:`accumulate_codes` (one band of :func:`.run_bands`)."""
     h, w = out.shape
-    for r in prange(h):
+    for r in range(r0, r1):
         src = h - 1 - r
         for c in range(w):
             code = (
@@ -48,7 +55,6 @@ def _cross(ax, ay, az, bx, by, bz):
     return ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
 
 
-@njit(cache=True)
 def resolve_hits(tid, points, triangles, normals, inv_clip, eye, view_dir, rot, parallel):
     """World position, depth, eye-space normal and barycentrics per pixel (new arrays; see
     :func:`resolve_hits_into`)."""
@@ -64,7 +70,6 @@ def resolve_hits(tid, points, triangles, normals, inv_clip, eye, view_dir, rot, 
     return world, depth, nrm, bary
 
 
-@njit(parallel=True, cache=True)
 def resolve_hits_into(
     tid, points, triangles, normals, inv_clip, eye, view_dir, rot, parallel, world, depth, nrm, bary
 ):
@@ -83,10 +88,22 @@ def resolve_hits_into(
     world (H, W, 3) f32, depth (H, W) f32, normal (H, W, 3) f32, bary (H, W, 3) f32
         The outputs; NaN on background.
     """
+    run_bands(
+        _hits_rows, tid.shape[0], tid, points, triangles, normals, inv_clip, eye, view_dir, rot,
+        parallel, world, depth, nrm, bary,
+    )  # fmt: skip
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _hits_rows(
+    r0, r1, tid, points, triangles, normals, inv_clip, eye, view_dir, rot, parallel, world, depth,
+    nrm, bary,
+):  # fmt: skip
+    """Rows ``r0 .. r1`` of :func:`resolve_hits_into` (one band of :func:`.run_bands`)."""
     h, w = tid.shape
     nan = np.float32(np.nan)
     m = inv_clip
-    for r in prange(h):
+    for r in range(r0, r1):
         yn = 2.0 * ((h - 1 - r) + 0.5) / h - 1.0
         for c in range(w):
             t = tid[r, c]
@@ -177,7 +194,6 @@ def resolve_hits_into(
                 nrm[r, c, k] = (rot[k, 0] * nx + rot[k, 1] * ny + rot[k, 2] * nz) / ln
 
 
-@njit(cache=True)
 def labels_and_sz(tid, depth, tri_obj, tri_cell, dist, pixel, parallel):
     """Object id, cell id and Saito's sz (1990 Eq. 6) per pixel, in one pass.
 
@@ -192,11 +208,19 @@ def labels_and_sz(tid, depth, tri_obj, tri_cell, dist, pixel, parallel):
     return obj, cell, sz
 
 
-@njit(parallel=True, cache=True)
 def labels_and_sz_into(tid, depth, tri_obj, tri_cell, dist, pixel, parallel, obj, cell, sz):
     """:func:`labels_and_sz` into the given arrays (every pixel written)."""
-    h, w = tid.shape
-    for r in prange(h):
+    run_bands(
+        _labels_rows, tid.shape[0], tid, depth, tri_obj, tri_cell, dist, pixel, parallel, obj,
+        cell, sz,
+    )  # fmt: skip
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _labels_rows(r0, r1, tid, depth, tri_obj, tri_cell, dist, pixel, parallel, obj, cell, sz):
+    """Rows ``r0 .. r1`` of :func:`labels_and_sz_into` (one band of :func:`.run_bands`)."""
+    w = tid.shape[1]
+    for r in range(r0, r1):
         for c in range(w):
             t = tid[r, c]
             if t < 0:
@@ -213,13 +237,20 @@ def labels_and_sz_into(tid, depth, tri_obj, tri_cell, dist, pixel, parallel, obj
                 sz[r, c] = dist * dist / (pixel * z)
 
 
-@njit(parallel=True, cache=True)
 def interpolate_points(tid, bary, triangles, values):
     """Barycentric interpolation of point values (n, k) float64 -> (H, W, k) float32."""
     h, w = tid.shape
+    out = np.full((h, w, values.shape[1]), np.nan, dtype=np.float32)
+    run_bands(_interpolate_rows, h, tid, bary, triangles, values, out)
+    return out
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _interpolate_rows(r0, r1, tid, bary, triangles, values, out):
+    """Rows ``r0 .. r1`` of :func:`interpolate_points` into ``out`` (NaN where it stays)."""
+    w = tid.shape[1]
     k = values.shape[1]
-    out = np.full((h, w, k), np.nan, dtype=np.float32)
-    for r in prange(h):
+    for r in range(r0, r1):
         for c in range(w):
             t = tid[r, c]
             if t < 0:
@@ -232,20 +263,25 @@ def interpolate_points(tid, bary, triangles, values):
                 acc += np.float64(bary[r, c, 1]) * values[i1, j]
                 acc += np.float64(bary[r, c, 2]) * values[i2, j]
                 out[r, c, j] = acc
-    return out
 
 
-@njit(parallel=True, cache=True)
 def lookup_cells(tid, values):
     """Per-triangle values (m, k) float32 -> (H, W, k) float32 by triangle index."""
     h, w = tid.shape
+    out = np.full((h, w, values.shape[1]), np.nan, dtype=np.float32)
+    run_bands(_lookup_rows, h, tid, values, out)
+    return out
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _lookup_rows(r0, r1, tid, values, out):
+    """Rows ``r0 .. r1`` of :func:`lookup_cells` into ``out`` (NaN where it stays)."""
+    w = tid.shape[1]
     k = values.shape[1]
-    out = np.full((h, w, k), np.nan, dtype=np.float32)
-    for r in prange(h):
+    for r in range(r0, r1):
         for c in range(w):
             t = tid[r, c]
             if t < 0:
                 continue
             for j in range(k):
                 out[r, c, j] = values[t, j]
-    return out

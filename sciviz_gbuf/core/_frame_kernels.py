@@ -13,7 +13,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
+
+from .bands import run_bands
 
 __all__ = ["frame_buffers"]
 
@@ -41,17 +43,27 @@ def _side_error(sz, mask, r1, c1, r2, c2, x, h, w):
     return abs(2.0 * s1 - x - np.float64(sz[r2, c2]))
 
 
-@njit(parallel=True, cache=True, error_model="numpy")
 def frame_buffers(z, p22, p23, p32, p33, parallel, dist, pixel, depth, sz, normal, mask):
     """``depth``, ``sz``, ``normal`` (NaN off the surface) and ``mask`` (H, W) of the window
     depth image ``z`` (H, W), bottom row first as OpenGL reads it; row 0 of the outputs is
     the top row. ``p22 .. p33``: the clip matrix's depth rows (row-major indices [2, 2],
     [2, 3], [3, 2], [3, 3]); ``dist``, ``pixel``: ``CameraInfo.distance``, ``.pixel_size``.
     A depth of 1 (the far plane, where nothing was drawn) or not in [0, 1) is background.
+
+    Two passes over bands of rows: the normals read the depths of rows beyond their band, so
+    they start once every band of the depths has ended.
     """
+    h = depth.shape[0]
+    run_bands(_depth_rows, h, z, p22, p23, p32, p33, parallel, dist, pixel, depth, sz, mask)
+    run_bands(_normal_rows, h, parallel, dist, pixel, depth, sz, normal, mask)
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _depth_rows(r0, r1, z, p22, p23, p32, p33, parallel, dist, pixel, depth, sz, mask):
+    """Rows ``r0 .. r1`` of ``depth``, ``sz`` and ``mask`` (one band of :func:`.run_bands`)."""
     h, w = depth.shape
     nan = np.float32(np.nan)
-    for r in prange(h):
+    for r in range(r0, r1):
         r = np.int64(r)
         src = h - 1 - r
         for c in range(w):
@@ -75,9 +87,16 @@ def frame_buffers(z, p22, p23, p32, p33, parallel, dist, pixel, depth, sz, norma
                 depth[r, c] = nan
                 sz[r, c] = nan
             mask[r, c] = ok
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _normal_rows(r0, r1, parallel, dist, pixel, depth, sz, normal, mask):
+    """Rows ``r0 .. r1`` of ``normal``, from the whole of ``depth``, ``sz`` and ``mask``."""
+    h, w = depth.shape
+    nan = np.float32(np.nan)
     inv_d = 1.0 / dist
     inv_w = 1.0 / pixel
-    for r in prange(h):
+    for r in range(r0, r1):
         r = np.int64(r)
         for c in range(w):
             if not mask[r, c]:

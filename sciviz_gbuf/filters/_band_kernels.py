@@ -10,7 +10,9 @@ All arithmetic is float32, as numpy does it on float32 heights.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
+
+from ..core.bands import run_bands
 
 # Band modes: a continuous ramp, regular bands of an interval, bands between levels.
 CONTINUOUS, INTERVAL, LEVELS = 0, 1, 2
@@ -50,11 +52,18 @@ def _band_rgb(v, mode, base, q, levels, mids, land, sea, tab):
     return land[i, 0], land[i, 1], land[i, 2]
 
 
-@njit(parallel=True, cache=True)
 def band_image(z, valid, mode, base, q, levels, mids, land, sea, tab, out):
     """``out[..., :3]`` band colours and ``out[..., 3]`` 1 where ``valid``; zeros elsewhere."""
-    h, w = z.shape
-    for i in prange(h):
+    run_bands(_band_rows, z.shape[0], z, valid, mode, base, q, levels, mids, land, sea, tab, out)
+
+
+# error_model="numpy" in the band kernels, as numba compiled the prange loop bodies they
+# replace: a division by zero gives inf / NaN, it does not raise.
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _band_rows(i0, i1, z, valid, mode, base, q, levels, mids, land, sea, tab, out):
+    """Rows ``i0 .. i1`` of :func:`band_image` (one band of :func:`.run_bands`)."""
+    w = z.shape[1]
+    for i in range(i0, i1):
         for j in range(w):
             if valid[i, j]:
                 r, g, b = _band_rgb(z[i, j], mode, base, q, levels, mids, land, sea, tab)
@@ -73,7 +82,6 @@ def _to_byte(x):
     return np.uint8(np.rint(x * np.float32(255.0)))
 
 
-@njit(parallel=True, cache=True)
 def map_image(
     z,
     bands,
@@ -101,12 +109,42 @@ def map_image(
     below 1 it multiplies the colour, above 1 it lifts it up to halfway to white. Then the
     contour ``ink`` (if not empty) blends towards ``ink_rgb``. NaN heights: transparent black.
     """
-    h, w = z.shape
+    run_bands(
+        _map_rows, z.shape[0], z, bands, mode, base, q, levels, mids, land, sea, tab, relief,
+        sh, flat, lit, sky, ink, ink_rgb, out,
+    )  # fmt: skip
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _map_rows(
+    i0,
+    i1,
+    z,
+    bands,
+    mode,
+    base,
+    q,
+    levels,
+    mids,
+    land,
+    sea,
+    tab,
+    relief,
+    sh,
+    flat,
+    lit,
+    sky,
+    ink,
+    ink_rgb,
+    out,
+):
+    """Rows ``i0 .. i1`` of :func:`map_image` (one band of :func:`.run_bands`)."""
+    w = z.shape[1]
     use_lit = lit.shape[0] > 0
     use_sky = sky.shape[0] > 0
     use_ink = ink.shape[0] > 0
     third = np.float32(1.0 / 3.0)
-    for i in prange(h):
+    for i in range(i0, i1):
         for j in range(w):
             v = z[i, j]
             if np.isnan(v):

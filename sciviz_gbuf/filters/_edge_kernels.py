@@ -15,7 +15,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
+
+from ..core.bands import run_bands
 
 __all__ = [
     "MODE_C1",
@@ -291,22 +293,10 @@ def _down_gaps(sz, depth, m, r, parallel, inv_d, out):
         out[c] = g
 
 
-@njit(parallel=True, cache=True)
 def pair_edge_kernel(
-    sz,
-    depth,
-    normal,
-    m,
-    parallel,
-    inv_d,
-    inv_w,
-    jump,
-    crease,
-    soft,
-    do_crease,
-    profile_out,
+    sz, depth, normal, m, parallel, inv_d, inv_w, jump, crease, soft, do_crease, profile_out,
     crease_out,
-):
+):  # fmt: skip
     """Profile ink on the nearer pixel of each 4-neighbour pair with an unexplained jump
     (the covered pixel next to the background counts as an infinite jump), and signed crease
     ink (> 0 convex) on X for the pairs (X, right) and (X, down) whose depths are continuous
@@ -317,14 +307,30 @@ def pair_edge_kernel(
     Each pair's jump is computed once and read from both of its pixels: it is symmetric bit
     for bit (swapping X and Y negates the step and both slopes exactly).
     """
+    run_bands(
+        _pair_edge_blocks, (sz.shape[0] + _ROWS - 1) // _ROWS, sz, depth, normal, m, parallel,
+        inv_d, inv_w, jump, crease, soft, do_crease, profile_out, crease_out,
+        scratch=lambda: (np.empty((2, sz.shape[1]), dtype=np.float64),),
+    )  # fmt: skip
+
+
+# error_model="numpy" in the band kernels, as numba compiled the prange loop bodies they
+# replace (a division by zero gives inf / NaN, it does not raise); _edge_pass_tasks keeps
+# the default, as the task function the old loop called had it.
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _pair_edge_blocks(
+    b0, b1, sz, depth, normal, m, parallel, inv_d, inv_w, jump, crease, soft, do_crease,
+    profile_out, crease_out, rows,
+):  # fmt: skip
+    """Row blocks ``b0 .. b1`` (of ``_ROWS`` rows) of :func:`pair_edge_kernel`; ``rows``
+    (2, W) float64 is the band's scratch (the gaps down from the row above and from this row)."""
     h, w = sz.shape
     cos_min = math.cos(math.radians(crease))
     cos_skip = cos_min + _COS_MARGIN
-    for b in prange((h + _ROWS - 1) // _ROWS):
+    up, down = rows[0], rows[1]
+    for b in range(b0, b1):
         r0 = np.int64(b) * _ROWS
         r1 = min(h, r0 + _ROWS)
-        up = np.empty(w, dtype=np.float64)
-        down = np.empty(w, dtype=np.float64)
         _down_gaps(sz, depth, m, r0 - 1, parallel, inv_d, up)
         for r in range(r0, r1):
             _down_gaps(sz, depth, m, r, parallel, inv_d, down)
@@ -391,12 +397,17 @@ def pair_edge_kernel(
             up, down = down, up
 
 
-@njit(parallel=True, cache=True)
 def id_edge_kernel(ids, depth, out):
     """1 on covered pixels X (``ids >= 0``) with a 4-neighbour Y of another id: the nearer of
     the two carries the line (ties: the upper / left one), and a background neighbour counts."""
+    run_bands(_id_edge_rows, ids.shape[0], ids, depth, out)
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _id_edge_rows(r0, r1, ids, depth, out):
+    """Rows ``r0 .. r1`` of :func:`id_edge_kernel`."""
     h, w = ids.shape
-    for r in prange(h):
+    for r in range(r0, r1):
         r = np.int64(r)
         for c in range(w):
             a = ids[r, c]
@@ -450,7 +461,6 @@ def _row_jumps(sz, depth, m, r, parallel, inv_d, jump, use_c1, out):
             out[k, c + 1] = _pair_jump(sz, depth, m, r, c, dr, dc, 1, parallel, inv_d, jump)
 
 
-@njit(parallel=True, cache=True)
 def edge_map_kernel(sz, depth, normal, m, parallel, inv_d, jump, crease, soft, use_c1, out):
     """The 2003 edge map: RGB = inner (normal) intensity, A = profile (depth) intensity.
 
@@ -460,13 +470,24 @@ def edge_map_kernel(sz, depth, normal, m, parallel, inv_d, jump, crease, soft, u
     [0, 2], or the C1 sum over the 8 neighbours of X (``use_c1``) scaled so a straight step
     gives 1. Each pair's jump is computed once, from its upper (or left) pixel.
     """
+    run_bands(
+        _edge_map_blocks, (sz.shape[0] + _ROWS - 1) // _ROWS, sz, depth, normal, m, parallel,
+        inv_d, jump, crease, soft, use_c1, out,
+        scratch=lambda: (np.empty((2, 4, sz.shape[1] + 2), dtype=np.float64),),
+    )  # fmt: skip
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _edge_map_blocks(b0, b1, sz, depth, normal, m, parallel, inv_d, jump, crease, soft, use_c1,
+                     out, rows):  # fmt: skip
+    """Row blocks ``b0 .. b1`` (of ``_ROWS`` rows) of :func:`edge_map_kernel`; ``rows``
+    (2, 4, W + 2) float64 is the band's scratch (the pairs of the row above and of this row)."""
     h, w = sz.shape
     cos_skip = math.cos(math.radians(crease)) + _COS_MARGIN
-    for b in prange((h + _ROWS - 1) // _ROWS):
+    up, cur = rows[0], rows[1]
+    for b in range(b0, b1):
         r0 = np.int64(b) * _ROWS
         r1 = min(h, r0 + _ROWS)
-        up = np.empty((4, w + 2), dtype=np.float64)  # the pairs from the row above
-        cur = np.empty((4, w + 2), dtype=np.float64)
         _row_jumps(sz, depth, m, r0 - 1, parallel, inv_d, jump, use_c1, up)
         for r in range(r0, r1):
             _row_jumps(sz, depth, m, r, parallel, inv_d, jump, use_c1, cur)
@@ -540,11 +561,12 @@ MODE_DIAGONAL = 1
 MODE_C1 = 2
 
 
-@njit(parallel=True, cache=True)
-def _valid_spans(sz, m, lo, hi):
-    """``lo[r]`` / ``hi[r]``: first / last valid column of row r (``w`` / ``-1`` if none)."""
-    h, w = sz.shape
-    for r in prange(h):
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _valid_spans(r0, r1, sz, m, lo, hi):
+    """``lo[r]`` / ``hi[r]``: first / last valid column of row r (``w`` / ``-1`` if none), for
+    the rows ``r0 .. r1``."""
+    w = sz.shape[1]
+    for r in range(r0, r1):
         r = np.int64(r)
         a = w
         for c in range(w):
@@ -965,231 +987,235 @@ def _crease_row(
                 )  # fmt: skip
 
 
-@njit(cache=True)
-def _edge_pass_task(
-    t, sz, depth, normal, m, parallel, inv_d, inv_w, jump, crease, soft, do_crease, mode, out_a,
-    out_b, two, crease2, soft2, out_c, lo, hi, cos_min, cos_skip, cos_min_c, cos_skip_c,
+@njit(cache=True, nogil=True)
+def _edge_pass_tasks(
+    t0, t1, sz, depth, normal, m, parallel, inv_d, inv_w, jump, crease, soft, do_crease, mode,
+    out_a, out_b, two, crease2, soft2, out_c, lo, hi, cos_min, cos_skip, cos_min_c, cos_skip_c,
     cos_min2, cos_skip2,
 ):  # fmt: skip
-    """One task of :func:`edge_pass`: rows ``t * _ROWS`` to ``(t + 1) * _ROWS``.
-
-    A function of its own, not the body of the ``prange`` loop: numba's parallel passes
-    analyse the loop body, and on this one they took most of a 47-s first compile."""
+    """Tasks ``t0 .. t1`` of :func:`edge_pass` (a band of :func:`.run_bands`): task ``t`` is the
+    rows ``t * _ROWS`` to ``(t + 1) * _ROWS``, with its own row buffers, as when each task
+    was one ``prange`` iteration (the outputs do not depend on how tasks are grouped)."""
     h, w = sz.shape
-    r0 = t * _ROWS
-    r1 = min(h, r0 + _ROWS)
-    # The task's span: columns within two pixels of a valid one in rows r0 - 2 .. r1 + 1.
-    a = w
-    b = np.int64(0)
-    for r in range(max(0, r0 - 2), min(h, r1 + 2)):
-        a = min(a, lo[r])
-        b = max(b, hi[r] + 1)
-    if a >= b:
-        a = b = 0
-    else:
-        a = max(0, a - 2)
-        b = min(w, b + 2)
-    for r in range(r0, r1):
-        for c in range(a):
-            out_a[r, c] = 0.0
-            out_b[r, c] = 0.0
-        for c in range(b, w):
-            out_a[r, c] = 0.0
-            out_b[r, c] = 0.0
-        if two:
-            for c in range(a):
-                out_c[r, c] = 0.0
-            for c in range(b, w):
-                out_c[r, c] = 0.0
-    if a >= b:
-        return
-    up_g = np.empty((4, w + 2), dtype=np.float64)
-    up_j = np.empty((4, w + 2), dtype=np.float64)
-    cur_g = np.empty((4, w + 2), dtype=np.float64)
-    cur_j = np.empty((4, w + 2), dtype=np.float64)
-    S = np.empty((4, w + 4), dtype=np.float64)
-    D = np.empty((4, w + 4), dtype=np.float64)
-    V = np.empty((4, w + 4), dtype=np.bool_)
-    EX = np.empty((4, w + 4), dtype=np.float64)
-    EY = np.empty((4, w + 4), dtype=np.float64)
-    EZ = np.empty((4, w + 4), dtype=np.float64)
-    prof = np.empty(w, dtype=np.float64)
-    may_h = np.zeros(w, dtype=np.bool_)
-    may_v = np.zeros(w, dtype=np.bool_)
-    dot_h = np.ones(w, dtype=np.float32)
-    dot_v = np.ones(w, dtype=np.float32)
-    dot_d1 = np.ones(w, dtype=np.float32)
-    dot_d2 = np.ones(w, dtype=np.float32)
-    ins = np.empty(4, dtype=np.float64)
-    cand = np.zeros(w, dtype=np.uint8)
-    cre_row = np.empty(w, dtype=np.float64)
-    cre_row2 = np.empty(w, dtype=np.float64)
-    inner_row = np.empty(w, dtype=np.float64)
-    for r in range(r0 - 2, r0 + 2):
-        _ring_fill(
-            sz, depth, m, r, a, b, h, w, parallel, inv_d, inv_w, do_crease, S, D, V, EX, EY, EZ
-        )
-    _pair_rows(S, D, V, r0 - 1, a, b, h, w, parallel, inv_d, jump, up_g, up_j)
-    for r in range(r0, r1):
-        _ring_fill(
-            sz,
-            depth,
-            m,
-            r + 2,
-            a,
-            b,
-            h,
-            w,
-            parallel,
-            inv_d,
-            inv_w,
-            do_crease,
-            S,
-            D,
-            V,
-            EX,
-            EY,
-            EZ,
-        )
-        _pair_rows(S, D, V, r, a, b, h, w, parallel, inv_d, jump, cur_g, cur_j)
-        s_up, s_r, s_dn, s_dn2 = (r - 1) & 3, r & 3, (r + 1) & 3, (r + 2) & 3
-        n = b - a
-        o = a + 2  # ring index of column a
-        ins[0] = 1.0
-        ins[1] = 1.0
-        ins[2] = 1.0 if r > 0 else 0.0
-        ins[3] = 1.0 if r + 1 < h else 0.0
-        _profile_row(
-            V[s_r, o:],
-            V[s_r, o - 1 :],
-            V[s_r, o + 1 :],
-            V[s_up, o:],
-            V[s_dn, o:],
-            S[s_r, o:],
-            S[s_r, o - 1 :],
-            S[s_r, o + 1 :],
-            S[s_up, o:],
-            S[s_dn, o:],
-            cur_g[3, a:],
-            cur_g[3, a + 1 :],
-            up_g[1, a + 1 :],
-            cur_g[1, a + 1 :],
-            n,
-            ins,
-            jump,
-            prof,
-        )
-        # The image border is not an edge: the first / last column has no neighbour there.
-        for c in (0, w - 1):
-            if a <= c < b:
-                prof[c - a] = _profile_at(V, S, cur_g, up_g, r, c, h, w, jump)
-        rn = min(r + 1, h - 1)  # (a row that exists; unused where the row below does not)
-        ru = max(r - 1, 0)
-        if do_crease:
-            _turn_row(
-                V[s_r, o - 1 :],
-                V[s_r, o + 2 :],
-                EX[s_r, o - 1 :],
-                EY[s_r, o - 1 :],
-                EZ[s_r, o - 1 :],
-                EX[s_r, o:],
-                EY[s_r, o:],
-                EZ[s_r, o:],
-                EX[s_r, o + 1 :],
-                EY[s_r, o + 1 :],
-                EZ[s_r, o + 1 :],
-                EX[s_r, o + 2 :],
-                EY[s_r, o + 2 :],
-                EZ[s_r, o + 2 :],
-                n,
-                cos_min_c,
-                may_h,
-            )
-            _turn_row(
-                V[s_up, o:],
-                V[s_dn2, o:],
-                EX[s_up, o:],
-                EY[s_up, o:],
-                EZ[s_up, o:],
-                EX[s_r, o:],
-                EY[s_r, o:],
-                EZ[s_r, o:],
-                EX[s_dn, o:],
-                EY[s_dn, o:],
-                EZ[s_dn, o:],
-                EX[s_dn2, o:],
-                EY[s_dn2, o:],
-                EZ[s_dn2, o:],
-                n,
-                cos_min_c,
-                may_v,
-            )
-            _dot_row(normal[r, a:], normal[r, min(a + 1, w - 1) :], n - (1 if b == w else 0), dot_h)
-            _dot_row(normal[r, a:], normal[rn, a:], n, dot_v)
-        # The diagonal pairs of pixel c = a + i, at index i: (r - 1, c - 1) . (r + 1, c + 1)
-        # and (r - 1, c + 1) . (r + 1, c - 1), for the columns that have both.
-        c_lo, c_hi = max(a, 1), min(b, w - 1)
-        if mode != MODE_PAIRS and c_hi > c_lo:
-            nd = c_hi - c_lo
-            _dot_row(normal[ru, c_lo - 1 :], normal[rn, c_lo + 1 :], nd, dot_d1[c_lo - a :])
-            _dot_row(normal[ru, c_lo + 1 :], normal[rn, c_lo - 1 :], nd, dot_d2[c_lo - a :])
-        if do_crease:
-            _candidates_row(
-                V[s_r, o:],
-                V[s_r, o + 1 :],
-                V[s_dn, o:],
-                cur_g[3, a + 1 :],
-                cur_g[1, a + 1 :],
-                may_h,
-                may_v,
-                dot_h,
-                dot_v,
-                n,
-                jump,
-                cos_skip_c,
-                1 if b == w else 0,
-                1 if r + 1 < h else 0,
-                cand,
-            )
-        for i in range(n):
-            cre_row[i] = 0.0
-            cre_row2[i] = 0.0
-        if do_crease:
-            _crease_row(
-                sz, depth, normal, m, r, a, n, cand, prof, may_h, may_v, h, w, parallel,
-                inv_d, inv_w, jump, crease, soft, cos_min, cos_skip, two, crease2, soft2,
-                cos_min2, cos_skip2, cre_row, cre_row2,
-            )  # fmt: skip
-        if mode == MODE_PAIRS:
-            _store_row(prof, cre_row, n, out_a[r, a:], out_b[r, a:])
-            if two:
-                out_c[r, a:b] = cre_row2[:n]
+    for t in range(t0, t1):
+        r0 = t * _ROWS
+        r1 = min(h, r0 + _ROWS)
+        # The task's span: columns within two pixels of a valid one in rows r0 - 2 .. r1 + 1.
+        a = w
+        b = np.int64(0)
+        for r in range(max(0, r0 - 2), min(h, r1 + 2)):
+            a = min(a, lo[r])
+            b = max(b, hi[r] + 1)
+        if a >= b:
+            a = b = 0
         else:
-            _edge_map_row(
-                V,
-                S,
-                dot_d1,
-                dot_d2,
-                up_j,
-                cur_j,
-                r,
-                a,
-                n,
-                mode,
-                crease,
-                soft,
-                cos_skip,
-                prof,
-                cre_row,
-                inner_row,
-                out_a[r, a:],
-                out_b[r, a:],
+            a = max(0, a - 2)
+            b = min(w, b + 2)
+        for r in range(r0, r1):
+            for c in range(a):
+                out_a[r, c] = 0.0
+                out_b[r, c] = 0.0
+            for c in range(b, w):
+                out_a[r, c] = 0.0
+                out_b[r, c] = 0.0
+            if two:
+                for c in range(a):
+                    out_c[r, c] = 0.0
+                for c in range(b, w):
+                    out_c[r, c] = 0.0
+        if a >= b:
+            continue
+        up_g = np.empty((4, w + 2), dtype=np.float64)
+        up_j = np.empty((4, w + 2), dtype=np.float64)
+        cur_g = np.empty((4, w + 2), dtype=np.float64)
+        cur_j = np.empty((4, w + 2), dtype=np.float64)
+        S = np.empty((4, w + 4), dtype=np.float64)
+        D = np.empty((4, w + 4), dtype=np.float64)
+        V = np.empty((4, w + 4), dtype=np.bool_)
+        EX = np.empty((4, w + 4), dtype=np.float64)
+        EY = np.empty((4, w + 4), dtype=np.float64)
+        EZ = np.empty((4, w + 4), dtype=np.float64)
+        prof = np.empty(w, dtype=np.float64)
+        may_h = np.zeros(w, dtype=np.bool_)
+        may_v = np.zeros(w, dtype=np.bool_)
+        dot_h = np.ones(w, dtype=np.float32)
+        dot_v = np.ones(w, dtype=np.float32)
+        dot_d1 = np.ones(w, dtype=np.float32)
+        dot_d2 = np.ones(w, dtype=np.float32)
+        ins = np.empty(4, dtype=np.float64)
+        cand = np.zeros(w, dtype=np.uint8)
+        cre_row = np.empty(w, dtype=np.float64)
+        cre_row2 = np.empty(w, dtype=np.float64)
+        inner_row = np.empty(w, dtype=np.float64)
+        for r in range(r0 - 2, r0 + 2):
+            _ring_fill(
+                sz, depth, m, r, a, b, h, w, parallel, inv_d, inv_w, do_crease, S, D, V, EX, EY, EZ
             )
-        up_g, cur_g = cur_g, up_g
-        up_j, cur_j = cur_j, up_j
+        _pair_rows(S, D, V, r0 - 1, a, b, h, w, parallel, inv_d, jump, up_g, up_j)
+        for r in range(r0, r1):
+            _ring_fill(
+                sz,
+                depth,
+                m,
+                r + 2,
+                a,
+                b,
+                h,
+                w,
+                parallel,
+                inv_d,
+                inv_w,
+                do_crease,
+                S,
+                D,
+                V,
+                EX,
+                EY,
+                EZ,
+            )
+            _pair_rows(S, D, V, r, a, b, h, w, parallel, inv_d, jump, cur_g, cur_j)
+            s_up, s_r, s_dn, s_dn2 = (r - 1) & 3, r & 3, (r + 1) & 3, (r + 2) & 3
+            n = b - a
+            o = a + 2  # ring index of column a
+            ins[0] = 1.0
+            ins[1] = 1.0
+            ins[2] = 1.0 if r > 0 else 0.0
+            ins[3] = 1.0 if r + 1 < h else 0.0
+            _profile_row(
+                V[s_r, o:],
+                V[s_r, o - 1 :],
+                V[s_r, o + 1 :],
+                V[s_up, o:],
+                V[s_dn, o:],
+                S[s_r, o:],
+                S[s_r, o - 1 :],
+                S[s_r, o + 1 :],
+                S[s_up, o:],
+                S[s_dn, o:],
+                cur_g[3, a:],
+                cur_g[3, a + 1 :],
+                up_g[1, a + 1 :],
+                cur_g[1, a + 1 :],
+                n,
+                ins,
+                jump,
+                prof,
+            )
+            # The image border is not an edge: the first / last column has no neighbour there.
+            for c in (0, w - 1):
+                if a <= c < b:
+                    prof[c - a] = _profile_at(V, S, cur_g, up_g, r, c, h, w, jump)
+            rn = min(r + 1, h - 1)  # (a row that exists; unused where the row below does not)
+            ru = max(r - 1, 0)
+            if do_crease:
+                _turn_row(
+                    V[s_r, o - 1 :],
+                    V[s_r, o + 2 :],
+                    EX[s_r, o - 1 :],
+                    EY[s_r, o - 1 :],
+                    EZ[s_r, o - 1 :],
+                    EX[s_r, o:],
+                    EY[s_r, o:],
+                    EZ[s_r, o:],
+                    EX[s_r, o + 1 :],
+                    EY[s_r, o + 1 :],
+                    EZ[s_r, o + 1 :],
+                    EX[s_r, o + 2 :],
+                    EY[s_r, o + 2 :],
+                    EZ[s_r, o + 2 :],
+                    n,
+                    cos_min_c,
+                    may_h,
+                )
+                _turn_row(
+                    V[s_up, o:],
+                    V[s_dn2, o:],
+                    EX[s_up, o:],
+                    EY[s_up, o:],
+                    EZ[s_up, o:],
+                    EX[s_r, o:],
+                    EY[s_r, o:],
+                    EZ[s_r, o:],
+                    EX[s_dn, o:],
+                    EY[s_dn, o:],
+                    EZ[s_dn, o:],
+                    EX[s_dn2, o:],
+                    EY[s_dn2, o:],
+                    EZ[s_dn2, o:],
+                    n,
+                    cos_min_c,
+                    may_v,
+                )
+                _dot_row(
+                    normal[r, a:], normal[r, min(a + 1, w - 1) :], n - (1 if b == w else 0), dot_h
+                )
+                _dot_row(normal[r, a:], normal[rn, a:], n, dot_v)
+            # The diagonal pairs of pixel c = a + i, at index i: (r - 1, c - 1) . (r + 1, c + 1)
+            # and (r - 1, c + 1) . (r + 1, c - 1), for the columns that have both.
+            c_lo, c_hi = max(a, 1), min(b, w - 1)
+            if mode != MODE_PAIRS and c_hi > c_lo:
+                nd = c_hi - c_lo
+                _dot_row(normal[ru, c_lo - 1 :], normal[rn, c_lo + 1 :], nd, dot_d1[c_lo - a :])
+                _dot_row(normal[ru, c_lo + 1 :], normal[rn, c_lo - 1 :], nd, dot_d2[c_lo - a :])
+            if do_crease:
+                _candidates_row(
+                    V[s_r, o:],
+                    V[s_r, o + 1 :],
+                    V[s_dn, o:],
+                    cur_g[3, a + 1 :],
+                    cur_g[1, a + 1 :],
+                    may_h,
+                    may_v,
+                    dot_h,
+                    dot_v,
+                    n,
+                    jump,
+                    cos_skip_c,
+                    1 if b == w else 0,
+                    1 if r + 1 < h else 0,
+                    cand,
+                )
+            for i in range(n):
+                cre_row[i] = 0.0
+                cre_row2[i] = 0.0
+            if do_crease:
+                _crease_row(
+                    sz, depth, normal, m, r, a, n, cand, prof, may_h, may_v, h, w, parallel,
+                    inv_d, inv_w, jump, crease, soft, cos_min, cos_skip, two, crease2, soft2,
+                    cos_min2, cos_skip2, cre_row, cre_row2,
+                )  # fmt: skip
+            if mode == MODE_PAIRS:
+                _store_row(prof, cre_row, n, out_a[r, a:], out_b[r, a:])
+                if two:
+                    # A loop, not a slice assignment: numba's shape check of that
+                    # compiles its error message, seconds of a first run.
+                    for i in range(n):
+                        out_c[r, a + i] = cre_row2[i]
+            else:
+                _edge_map_row(
+                    V,
+                    S,
+                    dot_d1,
+                    dot_d2,
+                    up_j,
+                    cur_j,
+                    r,
+                    a,
+                    n,
+                    mode,
+                    crease,
+                    soft,
+                    cos_skip,
+                    prof,
+                    cre_row,
+                    inner_row,
+                    out_a[r, a:],
+                    out_b[r, a:],
+                )
+            up_g, cur_g = cur_g, up_g
+            up_j, cur_j = cur_j, up_j
 
 
-@njit(parallel=True, cache=True)
 def edge_pass(
     sz,
     depth,
@@ -1228,13 +1254,12 @@ def edge_pass(
     cos_skip_c = cos_min_c + _COS_MARGIN
     lo = np.empty(h, dtype=np.int64)
     hi = np.empty(h, dtype=np.int64)
-    _valid_spans(sz, m, lo, hi)
-    for t in prange((h + _ROWS - 1) // _ROWS):
-        _edge_pass_task(
-            np.int64(t), sz, depth, normal, m, parallel, inv_d, inv_w, jump, crease, soft,
-            do_crease, mode, out_a, out_b, two, crease2, soft2, out_c, lo, hi, cos_min,
-            cos_skip, cos_min_c, cos_skip_c, cos_min2, cos_skip2,
-        )  # fmt: skip
+    run_bands(_valid_spans, h, sz, m, lo, hi)
+    run_bands(
+        _edge_pass_tasks, (h + _ROWS - 1) // _ROWS, sz, depth, normal, m, parallel, inv_d,
+        inv_w, jump, crease, soft, do_crease, mode, out_a, out_b, two, crease2, soft2, out_c, lo,
+        hi, cos_min, cos_skip, cos_min_c, cos_skip_c, cos_min2, cos_skip2,
+    )  # fmt: skip
 
 
 @njit(cache=True)
@@ -1316,16 +1341,24 @@ def _block_row(src, k, ow, acc, cnt):
                 cnt[j] += 1 if ok else 0
 
 
-@njit(parallel=True, cache=True)
 def edge_map_finish(inner, alpha, k, out):
     """``out`` (h, w, 4): the ``k x k`` block means of ``inner`` (into R, G, B) and ``alpha``
     (into A), NaN samples left out as in ``GBuffer.downsample``, clipped to [0, 1]: the
     downsample, stack and clip of the edge map in one pass."""
-    oh, ow = out.shape[0], out.shape[1]
-    for r in prange(oh):
+    ow = out.shape[1]
+    run_bands(
+        _edge_map_finish_rows, out.shape[0], inner, alpha, k, out,
+        scratch=lambda: (np.empty(ow, dtype=np.float64), np.empty(ow, dtype=np.int64)),
+    )  # fmt: skip
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _edge_map_finish_rows(r0, r1, inner, alpha, k, out, acc, cnt):
+    """Output rows ``r0 .. r1`` of :func:`edge_map_finish`; ``acc``, ``cnt`` (W_out,) are the
+    band's scratch (rewritten for every row)."""
+    ow = out.shape[1]
+    for r in range(r0, r1):
         r = np.int64(r)
-        acc = np.empty(ow, dtype=np.float64)
-        cnt = np.empty(ow, dtype=np.int64)
         for ch in range(2):
             _block_row((inner if ch == 0 else alpha)[r * k : r * k + k], k, ow, acc, cnt)
             for col in range(ow):
@@ -1458,17 +1491,25 @@ def clean_lines(profile, crease, mask, length, ids):
     return dropped
 
 
-@njit(parallel=True, cache=True)
 def finish_lines(ink, k, signed, out):
     """``out`` (h, w): the ``k x k`` block means of ``ink`` clipped to [0, 1], NaN samples left
     out (``GBuffer.downsample``); with ``signed``, the clipped mean of the positive part
     minus that of the negative part (as ``edges._finish_signed`` takes them)."""
-    oh, ow = out.shape
-    for r in prange(oh):
+    ow = out.shape[1]
+    run_bands(
+        _finish_lines_rows, out.shape[0], ink, k, signed, out,
+        scratch=lambda: (np.empty((2, ow), dtype=np.float64), np.empty(ow, dtype=np.int64)),
+    )  # fmt: skip
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _finish_lines_rows(r0, r1, ink, k, signed, out, sums, cnt):
+    """Output rows ``r0 .. r1`` of :func:`finish_lines`; ``sums`` (2, W_out) and ``cnt``
+    (W_out,) are the band's scratch (zeroed for every row)."""
+    ow = out.shape[1]
+    tp, tn = sums[0], sums[1]
+    for r in range(r0, r1):
         r = np.int64(r)
-        tp = np.empty(ow, dtype=np.float64)
-        tn = np.empty(ow, dtype=np.float64)
-        cnt = np.empty(ow, dtype=np.int64)
         for j in range(ow):
             tp[j] = 0.0
             tn[j] = 0.0
@@ -1500,16 +1541,21 @@ def finish_lines(ink, k, signed, out):
                 out[r, col] = p
 
 
-@njit(parallel=True, cache=True)
 def enhance_kernel(img, em, inner_c, prof_c, out):
     """``edges.enhance`` per pixel: the shade (NaN -> 1, clipped; ``img`` (H, W, 1) is grey,
     (H, W, 3) RGB), then ``lerp`` to ``inner_c`` by R and to ``prof_c`` by A of the edge map
     (NaN -> 0, clipped), in float32 as the array expressions take them."""
-    h, w = out.shape[0], out.shape[1]
+    run_bands(_enhance_rows, out.shape[0], img, em, inner_c, prof_c, out)
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _enhance_rows(r0, r1, img, em, inner_c, prof_c, out):
+    """Rows ``r0 .. r1`` of :func:`enhance_kernel`."""
+    w = out.shape[1]
     grey = img.shape[2] == 1
     one = np.float32(1.0)
     zero = np.float32(0.0)
-    for r in prange(h):
+    for r in range(r0, r1):
         for c in range(w):
             i = em[r, c, 0]
             i = zero if np.isnan(i) else min(max(i, zero), one)
@@ -1532,16 +1578,22 @@ def _max_row(src, n, out):
         out[c] = v if (v > m) | (v != v) else m
 
 
-@njit(parallel=True, cache=True)
 def dilate_kernel(ink, sign, lo, runs_a, runs_b, pad, out):
     """``out``: the grey dilation of ``ink`` (of its part ``max(sign * ink, 0)`` if ``sign`` is
     not 0) by the footprint whose row ``i`` is the run of columns ``runs_a[i]..runs_b[i]``,
     centred at ``lo`` as ``scipy.ndimage.grey_dilation`` centres it, 0 outside the image; NaN
     propagates as in ``np.maximum``. The input is copied into ``pad`` ((h + size - 1,
     w + size - 1), its border 0), so the maxima run over whole rows without a test per pixel."""
-    h, w = ink.shape
-    size = runs_a.size
-    for r in prange(h):
+    h = ink.shape[0]
+    run_bands(_dilate_pad_rows, h, ink, sign, lo, pad)
+    run_bands(_dilate_max_rows, h, ink, runs_a, runs_b, pad, out)
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _dilate_pad_rows(r0, r1, ink, sign, lo, pad):
+    """Rows ``r0 .. r1`` of :func:`dilate_kernel`'s input, into ``pad``."""
+    w = ink.shape[1]
+    for r in range(r0, r1):
         r = np.int64(r)
         src = ink[r]
         dst = pad[r + lo, lo:]
@@ -1550,7 +1602,14 @@ def dilate_kernel(ink, sign, lo, runs_a, runs_b, pad, out):
             if sign != 0:
                 v = max(sign * v, np.float32(0.0)) if v == v else v
             dst[c] = v
-    for r in prange(h):
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _dilate_max_rows(r0, r1, ink, runs_a, runs_b, pad, out):
+    """Rows ``r0 .. r1`` of :func:`dilate_kernel`'s output, from the filled ``pad``."""
+    w = ink.shape[1]
+    size = runs_a.size
+    for r in range(r0, r1):
         r = np.int64(r)
         row = out[r]
         for c in range(w):

@@ -5,7 +5,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
+
+from ..core.bands import run_bands
 
 _INV_SQUARE_OF_HALF_PI = 1.0 / ((math.pi * math.pi) / 4.0)
 
@@ -82,7 +84,6 @@ def _difference_between_angles(a1: float, a2: float) -> float:
     return diff
 
 
-@njit(parallel=True, cache=True)
 def hillshade_kernel(
     z: np.ndarray,
     inv_ew: float,
@@ -97,6 +98,32 @@ def hillshade_kernel(
     out = np.full((h, w), np.nan, dtype=np.float32)
     if h < 2 or w < 2:
         return out  # GDAL writes nodata everywhere: there is no 3x3 neighbourhood to extrapolate
+    run_bands(
+        _hillshade_rows, h, z, inv_ew, inv_ns, z_factor, azimuth, altitude, algorithm, variant,
+        out,
+    )  # fmt: skip
+    return out
+
+
+# error_model="numpy" in the band kernels, as numba compiled the prange loop bodies they
+# replace: a division by zero gives inf / NaN, it does not raise.
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _hillshade_rows(
+    i0: int,
+    i1: int,
+    z: np.ndarray,
+    inv_ew: float,
+    inv_ns: float,
+    z_factor: float,
+    azimuth: float,
+    altitude: float,
+    algorithm: int,
+    variant: int,
+    out: np.ndarray,
+) -> None:
+    """Rows ``i0 .. i1`` of :func:`hillshade_kernel` into ``out`` (one band of
+    :func:`.run_bands`; needs at least 2 x 2 cells)."""
+    w = z.shape[1]
     zf = z_factor / (2.0 if algorithm == 1 else 8.0)
     sin_alt = math.sin(math.radians(altitude))
     cos_alt_z = math.cos(math.radians(altitude)) * zf
@@ -105,7 +132,7 @@ def hillshade_kernel(
     sin_az_c = math.sin(az) * cos_alt_z
     square_z = zf * zf
     diag_c = math.cos(math.radians(225.0)) * cos_alt_z
-    for i in prange(h):
+    for i in range(i0, i1):
         for j in range(w):
             if np.isnan(z[i, j]):
                 continue
@@ -145,13 +172,17 @@ def hillshade_kernel(
                 else:
                     shade = cang
             out[i, j] = min(max(shade, 0.0), 1.0)
-    return out
 
 
-@njit(parallel=True, cache=True)
 def fill_ring_kernel(z: np.ndarray, out: np.ndarray) -> None:
+    run_bands(_fill_ring_rows, z.shape[0], z, out)
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _fill_ring_rows(i0: int, i1: int, z: np.ndarray, out: np.ndarray) -> None:
+    """Rows ``i0 .. i1`` of :func:`fill_ring_kernel` (one band of :func:`.run_bands`)."""
     h, w = z.shape
-    for i in prange(h):
+    for i in range(i0, i1):
         for j in range(w):
             v = z[i, j]
             out[i, j] = v

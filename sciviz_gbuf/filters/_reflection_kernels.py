@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
+
+from ..core.bands import run_bands
 
 __all__ = ["theta_image", "wrapped_gradient"]
 
@@ -22,7 +24,6 @@ def _wrap(d):
     return d
 
 
-@njit(parallel=True, cache=True)
 def theta_image(normal, world, mask, rot, eye, view_dir, parallel, reflect, e1, e2, phase, out):
     """``theta - phase`` wrapped into [-pi, pi) per pixel, NaN off the mask.
 
@@ -30,8 +31,18 @@ def theta_image(normal, world, mask, rot, eye, view_dir, parallel, reflect, e1, 
     ``normal @ rot``); ``reflect``: the reflected view ray, else the normal itself. All float32
     (``phase`` in [-pi, pi]).
     """
-    h, w = mask.shape
-    for r in prange(h):
+    run_bands(
+        _theta_rows, mask.shape[0], normal, world, mask, rot, eye, view_dir, parallel, reflect,
+        e1, e2, phase, out,
+    )  # fmt: skip
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _theta_rows(r0, r1, normal, world, mask, rot, eye, view_dir, parallel, reflect, e1, e2, phase,
+                out):  # fmt: skip
+    """Rows ``r0 .. r1`` of :func:`theta_image` (one band of :func:`.run_bands`)."""
+    w = mask.shape[1]
+    for r in range(r0, r1):
         for c in range(w):
             if not mask[r, c]:
                 out[r, c] = np.nan
@@ -61,12 +72,17 @@ def theta_image(normal, world, mask, rot, eye, view_dir, parallel, reflect, e1, 
             out[r, c] = _wrap(np.arctan2(b, a) - phase)
 
 
-@njit(parallel=True, cache=True)
 def wrapped_gradient(theta, out):
     """|grad theta| per pixel, central differences taken modulo 2 pi (one-sided beside NaN and
     the border; 0 where both sides are missing)."""
+    run_bands(_gradient_rows, theta.shape[0], theta, out)
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _gradient_rows(r0, r1, theta, out):
+    """Rows ``r0 .. r1`` of :func:`wrapped_gradient`."""
     h, w = theta.shape
-    for r in prange(h):
+    for r in range(r0, r1):
         for c in range(w):
             t = theta[r, c]
             if np.isnan(t):

@@ -9,21 +9,22 @@ A plane therefore gives the same response up to a coverage border as inside: the
 creates nor hides an edge; the profile of an object against the background is drawn from the
 mask by :mod:`.edges`. Masked / non-finite centre pixels get the operator's neutral value.
 
-Rows run in parallel. Each row is copied into buffers one column wider on each side, so its
-first and last column take the same path as the others; a row whose neighbourhoods are all
-valid skips the border rule, the others take it branch-free (selects only); LLVM vectorises
-both. Each operator has its own small kernel; without a mask one all-True row stands in for
-it. First-compile time shaped this module (``benchmarks/bench_cold_start.py``): the operator
-is inlined at two call sites only, and the border rule's and the contour codes' small helpers
-are ordinary jitted functions that LLVM inlines, not numba's (whose IR inlining was most of
-the cost).
+Bands of rows run at the same time, one per thread (:func:`.run_bands`). Each row is copied
+into buffers one column wider on each side, so its first and last column take the same path as
+the others; a row whose neighbourhoods are all valid skips the border rule, the others take it
+branch-free (selects only); LLVM vectorises both. Each operator has its own small kernel;
+without a mask one all-True row stands in for it. First-compile time shaped this module
+(``benchmarks/bench_cold_start.py``): the operator is inlined at two call sites only, and the
+border rule's and the contour codes' small helpers are ordinary jitted functions that LLVM
+inlines, not numba's (whose IR inlining was most of the cost).
 """
 
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
+from ..core.bands import run_bands
 from ._contour_kernels import MODULATE, NPRM, hatch_ink, levels_ink, regular_ink
 
 __all__ = ["diag_normal", "run"]
@@ -299,9 +300,11 @@ def _edge_columns(u, mid, lo, pu, pm, pl, ext):
 
 
 @njit(inline="always", cache=True)
-def _rows(code, op, img, m, k, aux, prm, out):
-    """Apply operator ``op`` (of kind ``code``) to every pixel; ``m`` is the (H, W) mask or
-    one all-True row; ``prm`` holds the parameters of the contour codes.
+def _rows(code, op, r0, r1, img, m, k, aux, prm, out, fs, bs):
+    """Apply operator ``op`` (of kind ``code``) to every pixel of rows ``r0 .. r1`` (one band
+    of :func:`.run_bands`); ``m`` is the (H, W) mask or one all-True row; ``prm`` holds the
+    parameters of the contour codes; ``fs`` (3, W + 2) float32 and ``bs`` (3, W + 2) bool are
+    the band's scratch rows.
 
     Inlined into one small kernel per operator with ``code`` a constant and ``op`` a known
     function, so LLVM folds the switches away and vectorises the column loops. The three rows
@@ -319,8 +322,10 @@ def _rows(code, op, img, m, k, aux, prm, out):
     # A typed flag, not the literal: one compiled _rows_valid serves every kernel.
     with_aux = np.bool_(code == SUPPRESS)
     zero = np.float32(0.0)
-    for r in prange(h):
-        r = np.int64(r)
+    # Scratch rows, one set per band (a band is one thread); every row rewrites all of them.
+    pu, pm, pl = fs[0], fs[1], fs[2]
+    qu, qm, ql = bs[0], bs[1], bs[2]
+    for r in range(r0, r1):
         up = r > 0
         dn = r < h - 1
         ru = r - 1 if up else r
@@ -332,9 +337,6 @@ def _rows(code, op, img, m, k, aux, prm, out):
             mu, mm, ml = m[0], m[0], m[0]
         xr = aux[r] if aux.shape[0] > 1 else aux[0]
         o = out[r]
-        pu = np.empty(w + 2, dtype=np.float32)
-        pm = np.empty(w + 2, dtype=np.float32)
-        pl = np.empty(w + 2, dtype=np.float32)
         _pad_row(u, pu, zero)
         _pad_row(mid, pm, zero)
         _pad_row(lo, pl, zero)
@@ -348,9 +350,6 @@ def _rows(code, op, img, m, k, aux, prm, out):
                     pl[c + 1], k, ax, prm,
                 )  # fmt: skip
             continue
-        qu = np.empty(w + 2, dtype=np.bool_)
-        qm = np.empty(w + 2, dtype=np.bool_)
-        ql = np.empty(w + 2, dtype=np.bool_)
         _pad_row(mu, qu, False)  # a (1, W) mask is that row's own (an image one row high)
         _pad_row(mm, qm, False)
         _pad_row(ml, ql, False)
@@ -358,49 +357,51 @@ def _rows(code, op, img, m, k, aux, prm, out):
             _pixel(code, op, neutral, pu, pm, pl, qu, qm, ql, up, dn, c, k, xr, prm, o, c - 1)
 
 
-@njit(parallel=True, cache=True)
-def _k_sobel(img, m, k, aux, prm, out):
-    _rows(SOBEL, _sobel, img, m, k, aux, prm, out)
+# error_model="numpy" in the band kernels, as numba compiled the prange loop bodies they
+# replace: a division by zero gives inf / NaN, it does not raise.
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _k_sobel(r0, r1, img, m, k, aux, prm, out, fs, bs):
+    _rows(SOBEL, _sobel, r0, r1, img, m, k, aux, prm, out, fs, bs)
 
 
-@njit(parallel=True, cache=True)
-def _k_second(img, m, k, aux, prm, out):
-    _rows(SECOND, _second, img, m, k, aux, prm, out)
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _k_second(r0, r1, img, m, k, aux, prm, out, fs, bs):
+    _rows(SECOND, _second, r0, r1, img, m, k, aux, prm, out, fs, bs)
 
 
-@njit(parallel=True, cache=True)
-def _k_c1(img, m, k, aux, prm, out):
-    _rows(C1, _c1, img, m, k, aux, prm, out)
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _k_c1(r0, r1, img, m, k, aux, prm, out, fs, bs):
+    _rows(C1, _c1, r0, r1, img, m, k, aux, prm, out, fs, bs)
 
 
-@njit(parallel=True, cache=True)
-def _k_diag_depth(img, m, k, aux, prm, out):
-    _rows(DIAG_DEPTH, _diag_depth, img, m, k, aux, prm, out)
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _k_diag_depth(r0, r1, img, m, k, aux, prm, out, fs, bs):
+    _rows(DIAG_DEPTH, _diag_depth, r0, r1, img, m, k, aux, prm, out, fs, bs)
 
 
-@njit(parallel=True, cache=True)
-def _k_normalize(img, m, k, aux, prm, out):
-    _rows(NORMALIZE, _normalize, img, m, k, aux, prm, out)
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _k_normalize(r0, r1, img, m, k, aux, prm, out, fs, bs):
+    _rows(NORMALIZE, _normalize, r0, r1, img, m, k, aux, prm, out, fs, bs)
 
 
-@njit(parallel=True, cache=True)
-def _k_suppress(img, m, k, aux, prm, out):
-    _rows(SUPPRESS, _suppress, img, m, k, aux, prm, out)
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _k_suppress(r0, r1, img, m, k, aux, prm, out, fs, bs):
+    _rows(SUPPRESS, _suppress, r0, r1, img, m, k, aux, prm, out, fs, bs)
 
 
-@njit(parallel=True, cache=True, fastmath={"contract"})
-def _k_contour(img, m, k, aux, prm, out):
-    _rows(CONTOUR, _contour, img, m, k, aux, prm, out)
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy", fastmath={"contract"})
+def _k_contour(r0, r1, img, m, k, aux, prm, out, fs, bs):
+    _rows(CONTOUR, _contour, r0, r1, img, m, k, aux, prm, out, fs, bs)
 
 
-@njit(parallel=True, cache=True, fastmath={"contract"})
-def _k_levels(img, m, k, aux, prm, out):
-    _rows(LEVELS, _levels, img, m, k, aux, prm, out)
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy", fastmath={"contract"})
+def _k_levels(r0, r1, img, m, k, aux, prm, out, fs, bs):
+    _rows(LEVELS, _levels, r0, r1, img, m, k, aux, prm, out, fs, bs)
 
 
-@njit(parallel=True, cache=True, fastmath={"contract"})
-def _k_hatch(img, m, k, aux, prm, out):
-    _rows(HATCH, _hatch, img, m, k, aux, prm, out)
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy", fastmath={"contract"})
+def _k_hatch(r0, r1, img, m, k, aux, prm, out, fs, bs):
+    _rows(HATCH, _hatch, r0, r1, img, m, k, aux, prm, out, fs, bs)
 
 
 _KERNELS = {
@@ -435,7 +436,10 @@ def run(
         aux = np.zeros((1, w), dtype=np.float32)
     if prm is None:
         prm = np.zeros(1, dtype=np.float32)
-    _KERNELS[name](image, m, np.float32(k), aux, prm, out)
+    run_bands(
+        _KERNELS[name], h, image, m, np.float32(k), aux, prm, out,
+        scratch=lambda: (np.empty((3, w + 2), np.float32), np.empty((3, w + 2), np.bool_)),
+    )  # fmt: skip
     return out
 
 
@@ -459,13 +463,17 @@ def _ndot_pair(u, mu, cu, lo, ml, cl, inside_u, inside_l, x0, x1, x2):
     return a0 * b0 + a1 * b1 + a2 * b2
 
 
-@njit(parallel=True, cache=True)
 def diag_normal(n, m, out):
     """2003 §4.1.2: ``I_N = (A.H + C.F) / 2`` over unit normals, clipped to [-1, 1]; 1 where the
     centre is masked. ``m`` is the (H, W) mask or one all-True row."""
+    run_bands(_diag_normal_rows, n.shape[0], n, m, out)
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _diag_normal_rows(r0, r1, n, m, out):
+    """Rows ``r0 .. r1`` of :func:`diag_normal` (one band of :func:`.run_bands`)."""
     h, w = n.shape[:2]
-    for r in prange(h):
-        r = np.int64(r)
+    for r in range(r0, r1):
         up, dn = r > 0, r < h - 1
         u, mid, lo = n[r - 1 if up else r], n[r], n[r + 1 if dn else r]
         if m.shape[0] > 1:

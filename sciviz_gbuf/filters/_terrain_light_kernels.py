@@ -5,7 +5,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
+
+from ..core.bands import run_bands
 
 
 @njit(cache=True, inline="always")
@@ -118,7 +120,6 @@ def line_max(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return rows, cols
 
 
-@njit(parallel=True, cache=True)
 def shadow_kernel(
     z: np.ndarray,
     d_row: float,
@@ -133,12 +134,39 @@ def shadow_kernel(
 ) -> np.ndarray:
     h, w = z.shape
     out = np.full((h, w), np.nan, dtype=np.float32)
+    run_bands(
+        _shadow_rows, h, z, d_row, d_col, step_len, row_ub, rw, col_ub, cw, altitude, sun_radius,
+        out,
+    )  # fmt: skip
+    return out
+
+
+# error_model="numpy" in the band kernels, as numba compiled the prange loop bodies they
+# replace: a division by zero gives inf / NaN, it does not raise.
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _shadow_rows(
+    i0: int,
+    i1: int,
+    z: np.ndarray,
+    d_row: float,
+    d_col: float,
+    step_len: float,
+    row_ub: np.ndarray,
+    rw: int,
+    col_ub: np.ndarray,
+    cw: int,
+    altitude: float,
+    sun_radius: float,
+    out: np.ndarray,
+) -> None:
+    """Rows ``i0 .. i1`` of :func:`shadow_kernel` into ``out`` (one band of :func:`.run_bands`)."""
+    h, w = z.shape
     floor_tan = math.tan(math.radians(altitude - sun_radius))
     stop_tan = math.tan(math.radians(altitude + sun_radius)) if sun_radius > 0.0 else floor_tan
     alt = math.radians(altitude)
     rad = math.radians(sun_radius)
     max_steps = h + w
-    for i in prange(h):
+    for i in range(i0, i1):
         for j in range(w):
             if np.isnan(z[i, j]):
                 continue
@@ -164,10 +192,8 @@ def shadow_kernel(
                 # share of the sun disc above a straight horizon at elevation atan(t)
                 s = min(max((math.atan(t) - alt) / rad, -1.0), 1.0)
                 out[i, j] = (math.acos(s) - s * math.sqrt(1.0 - s * s)) / math.pi
-    return out
 
 
-@njit(parallel=True, cache=True)
 def sky_view_kernel(
     z: np.ndarray,
     d_rows: np.ndarray,
@@ -182,11 +208,39 @@ def sky_view_kernel(
 ) -> np.ndarray:
     h, w = z.shape
     out = np.full((h, w), np.nan, dtype=np.float32)
+    # the steps each direction takes within the radius (float64 arithmetic, as in the kernel)
+    max_steps = np.array(
+        [min(math.floor(radius / float(s) * (1.0 + 1e-12)), h + w) for s in step_lens],
+        dtype=np.int64,
+    )
+    run_bands(
+        _sky_view_rows, h, z, d_rows, d_cols, step_lens, row_ubs, col_ubs, row_which, col_which,
+        local_ub, max_steps, out,
+    )  # fmt: skip
+    return out
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _sky_view_rows(
+    i0: int,
+    i1: int,
+    z: np.ndarray,
+    d_rows: np.ndarray,
+    d_cols: np.ndarray,
+    step_lens: np.ndarray,
+    row_ubs: np.ndarray,
+    col_ubs: np.ndarray,
+    row_which: np.ndarray,
+    col_which: np.ndarray,
+    local_ub: np.ndarray,
+    max_steps: np.ndarray,
+    out: np.ndarray,
+) -> None:
+    """Rows ``i0 .. i1`` of :func:`sky_view_kernel` into ``out`` (one band of
+    :func:`.run_bands`); ``max_steps`` are the steps of each direction within the radius."""
+    w = z.shape[1]
     n = d_rows.shape[0]
-    max_steps = np.empty(n, dtype=np.int64)
-    for d in range(n):
-        max_steps[d] = min(math.floor(radius / step_lens[d] * (1.0 + 1e-12)), h + w)
-    for i in prange(h):
+    for i in range(i0, i1):
         for j in range(w):
             if np.isnan(z[i, j]):
                 continue
@@ -210,4 +264,3 @@ def sky_view_kernel(
                 )
                 acc += t / math.sqrt(1.0 + t * t)  # sin(atan(t)), t >= 0
             out[i, j] = 1.0 - acc / n
-    return out

@@ -4,10 +4,11 @@ one pass per pixel."""
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
+
+from ..core.bands import run_bands
 
 
-@njit(parallel=True, cache=True)
 def compose_kernel(
     mode,
     normal,
@@ -36,6 +37,42 @@ def compose_kernel(
     then the edge map (``emap``, empty: none), the band ``tint`` and contour ``ink`` (empty:
     none), to uint8 ``out``. ``layer``: the lines style's ink or hatch's profile ink (hatch:
     strokes give way to paper within one pixel of it, as ``profile_halo``)."""
+    run_bands(
+        _compose_rows, mask.shape[0], mode, normal, mask, light, consts_gooch, toon_table,
+        toon_bg, hatch_sc, hatch_spacing, hatch_tau, hatch_left, hatch_ink, halo_core, shade_c,
+        layer, emap, inner_c, prof_c, tint, ink, ink_c, out,
+    )  # fmt: skip
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _compose_rows(
+    i0,
+    i1,
+    mode,
+    normal,
+    mask,
+    light,
+    consts_gooch,
+    toon_table,
+    toon_bg,
+    hatch_sc,
+    hatch_spacing,
+    hatch_tau,
+    hatch_left,
+    hatch_ink,
+    halo_core,
+    shade_c,
+    layer,
+    emap,
+    inner_c,
+    prof_c,
+    tint,
+    ink,
+    ink_c,
+    out,
+):
+    """Rows ``i0 .. i1`` of :func:`compose_kernel` (one band of :func:`.run_bands`; the
+    profile halo reads ``layer`` rows beyond the band: an input, not written here)."""
     h, w = mask.shape
     lx, ly, lz = light[0], light[1], light[2]
     use_emap = emap.shape[0] > 0
@@ -45,7 +82,7 @@ def compose_kernel(
     zero = np.float32(0.0)
     n_tex = toon_table.shape[0]
     n_fam = hatch_sc.shape[1]
-    for i in prange(h):
+    for i in range(i0, i1):
         for j in range(w):
             r = g = b = one
             if mode == 4:  # lines: ink on paper
@@ -126,11 +163,16 @@ def compose_kernel(
             out[i, j, 2] = np.uint8(np.rint(min(max(b, zero), one) * np.float32(255.0)))
 
 
-@njit(parallel=True, cache=True)
 def rgb_on_paper(rgba, out):
     """``out``: the RGB of ``rgba``, white where it is fully transparent."""
-    h, w = out.shape[:2]
-    for i in prange(h):
+    run_bands(_paper_rows, out.shape[0], rgba, out)
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _paper_rows(i0, i1, rgba, out):
+    """Rows ``i0 .. i1`` of :func:`rgb_on_paper`."""
+    w = out.shape[1]
+    for i in range(i0, i1):
         for j in range(w):
             clear = rgba[i, j, 3] == 0
             for c in range(3):

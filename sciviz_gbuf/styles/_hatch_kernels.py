@@ -5,12 +5,13 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
+
+from ..core.bands import run_bands
 
 __all__ = ["hatch_compose", "screen_strokes"]
 
 
-@njit(parallel=True, cache=True)
 def screen_strokes(normal, mask, light, theta, sp, cap_w, tau, left, max_ink, out):
     """``out`` (H, W): the stroke ink ``1 - prod_f (1 - ink_f)`` of the families that ink each
     pixel with ``tone > 0`` (family ``f >= 1`` where ``tone > tau[f]``), 0 elsewhere; the tone
@@ -22,20 +23,27 @@ def screen_strokes(normal, mask, light, theta, sp, cap_w, tau, left, max_ink, ou
     (``_family_coverage``), the width ``cover sp`` (capped at ``cap_w`` if ``cap_w >= 0``) and
     the antialiased ink (``stroke_ink``) in float32.
     """
+    # the families' sines and cosines (float64 theta: libm's sin and cos, as numba's math.*)
+    sin_a = np.array([math.sin(float(a)) for a in theta], dtype=np.float64)
+    cos_a = np.array([math.cos(float(a)) for a in theta], dtype=np.float64)
+    run_bands(
+        _strokes_rows, mask.shape[0], normal, mask, light, sin_a, cos_a, sp, cap_w, tau, left,
+        max_ink, out,
+    )  # fmt: skip
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _strokes_rows(r0, r1, normal, mask, light, sin_a, cos_a, sp, cap_w, tau, left, max_ink, out):
+    """Rows ``r0 .. r1`` of :func:`screen_strokes` (one band of :func:`.run_bands`)."""
     h, w = mask.shape
-    n = theta.size
+    n = sin_a.size
     lx, ly, lz = light[0], light[1], light[2]
-    sin_a = np.empty(n, dtype=np.float64)
-    cos_a = np.empty(n, dtype=np.float64)
-    for f in range(n):
-        sin_a[f] = math.sin(theta[f])
-        cos_a[f] = math.cos(theta[f])
     one = np.float32(1.0)
     zero = np.float32(0.0)
     half = np.float32(0.5)
     period = np.float32(sp)
     m_ink = np.float32(max_ink)
-    for r in prange(h):
+    for r in range(r0, r1):
         r = np.int64(r)
         y = np.float64(np.float32(h - 1 - r))
         for c in range(w):
@@ -69,7 +77,6 @@ def screen_strokes(normal, mask, light, theta, sp, cap_w, tau, left, max_ink, ou
             out[r, c] = one - paper
 
 
-@njit(parallel=True, cache=True)
 def hatch_compose(strokes, k, mask, prof, edges, halo_core, ink_c, paper_c, out):
     """``out`` (h, w, 3): the hatch picture of ``hatch.hatch`` from its buffer-size stroke ink.
 
@@ -79,10 +86,19 @@ def hatch_compose(strokes, k, mask, prof, edges, halo_core, ink_c, paper_c, out)
     >= ``halo_core``, and where the block is not fully covered), and the profiles are drawn
     over it (``* (1 - prof)``); then ``amount (ink - paper) + paper``, clipped, in float32.
     """
+    run_bands(
+        _compose_rows, out.shape[0], strokes, k, mask, prof, edges, halo_core, ink_c, paper_c, out
+    )
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _compose_rows(r0, r1, strokes, k, mask, prof, edges, halo_core, ink_c, paper_c, out):
+    """Output rows ``r0 .. r1`` of :func:`hatch_compose` (the 3 x 3 maximum reads ``prof``
+    rows beyond the band: an input, not written here)."""
     oh, ow = out.shape[0], out.shape[1]
     one = np.float32(1.0)
     zero = np.float32(0.0)
-    for r in prange(oh):
+    for r in range(r0, r1):
         r = np.int64(r)
         for c in range(ow):
             if k == 1:

@@ -4,7 +4,9 @@ output size in the same pass (no buffer-size colour image in between)."""
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
+
+from ..core.bands import run_bands
 
 __all__ = ["gooch_shade", "lambert_shade", "modulation_image", "toon_shade"]
 
@@ -32,15 +34,20 @@ def _n_dot_l(normal, mask, r, c, lx, ly, lz):
     return min(max(d, np.float32(-1.0)), np.float32(1.0))
 
 
-@njit(parallel=True, cache=True)
 def gooch_shade(normal, mask, light, k_warm, k_cool, bg, clip, k, out):
     """``out`` (h, w, 3): the ``k x k`` block means of ``clip(t k_warm + (1 - t) k_cool)``,
     ``t = (1 + N.L) / 2``, paper ``bg`` off the mask, clipped to [0, 1] (``tone.gooch``)."""
-    oh, ow = out.shape[0], out.shape[1]
+    run_bands(_gooch_rows, out.shape[0], normal, mask, light, k_warm, k_cool, bg, clip, k, out)
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _gooch_rows(r0, r1, normal, mask, light, k_warm, k_cool, bg, clip, k, out):
+    """Output rows ``r0 .. r1`` of :func:`gooch_shade` (one band of :func:`.run_bands`)."""
+    ow = out.shape[1]
     lx, ly, lz = light[0], light[1], light[2]
     half = np.float32(0.5)
     one = np.float32(1.0)
-    for r in prange(oh):
+    for r in range(r0, r1):
         r = np.int64(r)
         for col in range(ow):
             t0 = 0.0
@@ -72,17 +79,22 @@ def gooch_shade(normal, mask, light, k_warm, k_cool, bg, clip, k, out):
                 out[r, col, ch] = min(max(v, np.float32(0.0)), one)
 
 
-@njit(parallel=True, cache=True)
 def toon_shade(normal, mask, light, table, bg, k, out):
     """``out`` (h, w, 3): the ``k x k`` block means of the toon texel of ``max(N.L, 0)`` (the
     ``n`` texels of ``table``, paper ``bg`` off the mask), clipped to [0, 1] (``tone.toon``
     without smoothing)."""
-    oh, ow = out.shape[0], out.shape[1]
+    run_bands(_toon_rows, out.shape[0], normal, mask, light, table, bg, k, out)
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _toon_rows(r0, r1, normal, mask, light, table, bg, k, out):
+    """Output rows ``r0 .. r1`` of :func:`toon_shade`."""
+    ow = out.shape[1]
     lx, ly, lz = light[0], light[1], light[2]
     n_tex = table.shape[0]
     fn = np.float32(n_tex)
     one = np.float32(1.0)
-    for r in prange(oh):
+    for r in range(r0, r1):
         r = np.int64(r)
         for col in range(ow):
             t0 = 0.0
@@ -107,19 +119,24 @@ def toon_shade(normal, mask, light, table, bg, k, out):
                 out[r, col, ch] = min(max(v, np.float32(0.0)), one)
 
 
-@njit(parallel=True, cache=True)
 def lambert_shade(normal, mask, light, ambient, highlight, k, out):
     """``out`` (h, w): the ``k x k`` block means of ``highlight * clip(ambient + (1 - ambient)
     max(N.L, 0))`` on the surface and 1 (paper) off it, NaN normals left out, clipped to
     [0, 1] (``illustration.shade_image``, with ``filters.lambert``'s arithmetic)."""
-    oh, ow = out.shape
+    run_bands(_lambert_rows, out.shape[0], normal, mask, light, ambient, highlight, k, out)
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _lambert_rows(r0, r1, normal, mask, light, ambient, highlight, k, out):
+    """Output rows ``r0 .. r1`` of :func:`lambert_shade`."""
+    ow = out.shape[1]
     lx, ly, lz = light[0], light[1], light[2]
     one = np.float32(1.0)
     zero = np.float32(0.0)
     rest = np.float32(1.0 - ambient)
     amb = np.float32(ambient)
     hi = np.float32(highlight)
-    for r in prange(oh):
+    for r in range(r0, r1):
         r = np.int64(r)
         for col in range(ow):
             tot = 0.0
@@ -144,13 +161,18 @@ def lambert_shade(normal, mask, light, ambient, highlight, k, out):
                 out[r, col] = min(max(v, zero), one)
 
 
-@njit(parallel=True, cache=True)
 def modulation_image(normal, mask, light, none, full, out):
     """``out`` (h, w): ``lines.modulation(filters.lambert(normal, light=light, mask=mask))``
     value for value at the buffer resolution, without the shade image in between: the
     smoothstep of the tone ``1 - max(N.L, 0)`` from ``none`` to ``full`` (float32, N.L summed
     component by component as ``lambert`` does); 0 off the mask and where N.L is NaN."""
-    h, w = mask.shape
+    run_bands(_modulation_rows, mask.shape[0], normal, mask, light, none, full, out)
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _modulation_rows(r0, r1, normal, mask, light, none, full, out):
+    """Rows ``r0 .. r1`` of :func:`modulation_image`."""
+    w = mask.shape[1]
     lx, ly, lz = light[0], light[1], light[2]
     one = np.float32(1.0)
     zero = np.float32(0.0)
@@ -158,7 +180,7 @@ def modulation_image(normal, mask, light, none, full, out):
     span = np.float32(full - none)
     three = np.float32(3.0)
     two = np.float32(2.0)
-    for r in prange(h):
+    for r in range(r0, r1):
         r = np.int64(r)
         for c in range(w):
             d = normal[r, c, 0] * lx

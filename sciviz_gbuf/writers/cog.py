@@ -49,13 +49,13 @@ def local_client(
 ):
     """A ``distributed.Client`` of a new ``LocalCluster`` of worker processes.
 
-    Each worker runs ``threads_per_worker`` dask threads, and each of those may start numba's
-    ``parallel=True`` kernels (our filters). Numba sizes its thread pool from
-    ``NUMBA_NUM_THREADS`` at import, default all cores, so 2 workers on 2 cores would run 4
-    threads. The workers' environment therefore gets ``NUMBA_NUM_THREADS = cores //
-    (n_workers * threads_per_worker)`` (at least 1), through dask's
-    ``distributed.nanny.pre-spawn-environ`` so it is set before anything imports numba in the
-    worker. A ``NUMBA_NUM_THREADS`` already set in this process's environment wins (dask's
+    Each worker runs ``threads_per_worker`` dask threads, and each of those may run our
+    filters' numba kernels on bands of rows, one band per thread (:mod:`sciviz_gbuf.core.bands`).
+    That thread count is ``NUMBA_NUM_THREADS`` as numba reads it at import, default all cores,
+    so 2 workers on 2 cores would run 4 threads. The workers' environment therefore gets
+    ``NUMBA_NUM_THREADS = cores // (n_workers * threads_per_worker)`` (at least 1), through
+    dask's ``distributed.nanny.pre-spawn-environ`` so it is set before anything imports numba
+    in the worker. A ``NUMBA_NUM_THREADS`` already set in this process's environment wins (dask's
     rule: existing variables over configuration).
 
     Parameters

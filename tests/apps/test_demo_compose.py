@@ -523,7 +523,7 @@ def test_numba_cache_is_cold_looks_where_numba_keeps_its_cache(tmp_path, monkeyp
     assert numba_cache_is_cold()
     deep = tmp_path / "work" / "sciviz_gbuf" / "filters"
     deep.mkdir(parents=True)
-    (deep / "_edge_kernels.edge_pass-1021.py311.nbi").write_bytes(b"")
+    (deep / "_edge_kernels._edge_pass_tasks-988.py311.nbi").write_bytes(b"")
     assert not numba_cache_is_cold()
 
 
