@@ -86,7 +86,7 @@ def _unexplained(jump, s_left, ok_left, s_right, ok_right):
     return 0.0
 
 
-@njit(inline="always", cache=True)
+@njit(cache=True)
 def _pair_gap(sz, depth, m, r, c, dr, dc, steps, parallel, inv_d):
     """Unexplained jump, in pixel footprints, between (r, c) and (r + steps dr, c + steps dc).
 
@@ -118,7 +118,7 @@ def _ramp(value, start, width):
     return min(1.0, max(0.0, t))
 
 
-@njit(inline="always", cache=True)
+@njit(cache=True)
 def _eye(depth, r, c, h, w, parallel, inv_d, inv_w):
     """Eye-space position of pixel (r, c) in units of the focal-plane pixel size."""
     z = np.float64(depth[r, c])
@@ -126,7 +126,7 @@ def _eye(depth, r, c, h, w, parallel, inv_d, inv_w):
     return (c + 0.5 - 0.5 * w) * k, (0.5 * h - r - 0.5) * k, -z * inv_w
 
 
-@njit(inline="always", cache=True)
+@njit(cache=True)
 def _turn(ax, ay, az, bx, by, bz):
     """Angle in degrees between two 3-vectors (atan2 form: exact near 0); 0 if one is null."""
     cx = ay * bz - az * by
