@@ -52,7 +52,7 @@ _COS_MARGIN = 1e-9
 _SCAN = 64
 
 
-@njit(inline="always", cache=True)
+@njit(cache=True)
 def _valid(sz, m, r, c):
     h, w = sz.shape
     if r < 0 or r >= h or c < 0 or c >= w:
@@ -61,13 +61,13 @@ def _valid(sz, m, r, c):
     return m[r, c] and (v - v == 0.0)
 
 
-@njit(inline="always", cache=True)
+@njit(cache=True)
 def _inside(sz, r, c):
     h, w = sz.shape
     return r >= 0 and r < h and c >= 0 and c < w
 
 
-@njit(inline="always", cache=True)
+@njit(cache=True)
 def _unexplained(jump, s_left, ok_left, s_right, ok_right):
     """Distance of ``jump`` from the interval of the two one-sided predictions.
 
@@ -112,7 +112,7 @@ def _pair_gap(sz, depth, m, r, c, dr, dc, steps, parallel, inv_d):
     return gap * scale / math.sqrt(1.0 + s * s)
 
 
-@njit(inline="always", cache=True)
+@njit(cache=True)
 def _ramp(value, start, width):
     t = (value - start) / width
     return min(1.0, max(0.0, t))
@@ -247,7 +247,7 @@ def _flank_dihedral(sz, depth, m, rm, cm, rp, cp, dr, dc, h, w, parallel, inv_d,
     return _turn(lx, ly, lz, rx, ry, rz)
 
 
-@njit(inline="always", cache=True)
+@njit(cache=True)
 def _dot(n, r, c, r2, c2):
     """float32 dot product of two normals, as the angle tests have always summed it."""
     return n[r, c, 0] * n[r2, c2, 0] + n[r, c, 1] * n[r2, c2, 1] + n[r, c, 2] * n[r2, c2, 2]
@@ -429,7 +429,7 @@ def _id_edge_rows(r0, r1, ids, depth, out):
             out[r, c] = v
 
 
-@njit(inline="always", cache=True)
+@njit(cache=True)
 def _pair_jump(sz, depth, m, r, c, dr, dc, steps, parallel, inv_d, jump):
     """Depth discontinuity strength in [0, 1] of the pair (r, c) -> (r + steps d)."""
     r2, c2 = r + steps * dr, c + steps * dc
@@ -1383,7 +1383,7 @@ def _edge_map_finish_rows(r0, r1, inner, alpha, k, out, acc, cnt):
 # label images) cost far more than union-find over a list of the ink pixels.
 
 
-@njit(inline="always", cache=True)
+@njit(cache=True)
 def _find(parent, i):
     while parent[i] != i:
         parent[i] = parent[parent[i]]
@@ -1391,7 +1391,7 @@ def _find(parent, i):
     return i
 
 
-@njit(inline="always", cache=True)
+@njit(cache=True)
 def _union(parent, i, j):
     a = _find(parent, i)
     b = _find(parent, j)
