@@ -32,7 +32,7 @@ from ..core.capture import capture, check_window_size
 from ..core.gbuffer import GBuffer
 from ..datasets import load_frog_skeleton, load_jacksboro_dem, load_jacksboro_terrain, load_nut
 from ..errors import InputError, OutputError
-from ..filters import lambert
+from ..filters import lambert, profile_edges
 from ..recipes import CAPTIONS as EDGE_CAPTIONS
 from ..recipes import (
     CONTOUR_CAPTIONS,
@@ -671,13 +671,42 @@ def _write_index(scenes: list[_Scene], figures: list[_Figure], outdir: Path) -> 
 
 
 def _steps(width: int, height: int) -> list[tuple[str, Callable, object]]:
-    """The demo's steps in order: ``(title, writer, scene or figure)``."""
+    """The demo's steps in the order a run takes them: ``(title, writer, scene or figure)``.
+
+    The gallery page lists them in the papers' order (:func:`_page_order`); a run takes the
+    contour figures before the edge figures and the terrain figures after the medical and
+    surface ones. On a first run that keeps the two processes from compiling the same kernels:
+    the second one (:func:`_warm`) goes backwards and starts with the NPR styles, whose first
+    kernel is the edge pass (the longest compile), while this one compiles the contour and
+    operator kernels; the terrain kernels are then the second process's next ones.
+    """
+    size = (width, height)
     scenes = _scenes(width / height)
-    figures = _edge_figures() + _contour_figures(max(16, min(width, height, CONTOUR_SIZE)))
-    figures += _terrain_figures((width, height)) + _medical_figures((width, height))
-    figures += _surface_figures((width, height)) + _npr_figures((width, height))
+    groups = [
+        _contour_figures(max(16, min(width, height, CONTOUR_SIZE))),
+        _edge_figures(),
+        _medical_figures(size),
+        _surface_figures(size),
+        _terrain_figures(size),
+        _npr_figures(size),
+    ]
     steps: list[tuple[str, Callable, object]] = [(sc.title, _write_scene, sc) for sc in scenes]
-    return steps + [(fig.title, _write_figure, fig) for fig in figures]
+    return steps + [(fig.title, _write_figure, fig) for group in groups for fig in group]
+
+
+#: The papers' order of the figure groups on the gallery page (title prefixes).
+_PAGE_GROUPS = ("Edges", "Contours", "Terrain", "Medical", "Surface analysis", "NPR styles")
+
+
+def _page_order(figures: list[_Figure]) -> list[_Figure]:
+    """The figures as the gallery lists them: edges, contours, terrain, medical, surface
+    analysis, NPR (a group's own figures in the order they ran)."""
+
+    def group(fig: _Figure) -> int:
+        topic = fig.title.split(":")[0]
+        return _PAGE_GROUPS.index(topic) if topic in _PAGE_GROUPS else len(_PAGE_GROUPS)
+
+    return sorted(figures, key=group)
 
 
 #: Window size of the second process's steps (:mod:`.warmup`): small, so that compiling is
@@ -685,15 +714,23 @@ def _steps(width: int, height: int) -> list[tuple[str, Callable, object]]:
 WARMUP_SIZE = (160, 120)
 
 
+def _edge_lines_first() -> None:
+    """The profile lines of a small capture: the edge pass and the line cleaning, the longest
+    compile of a first run (about 20 s), which every figure after the contour ones needs."""
+    profile_edges(capture(load_nut(), window_size=WARMUP_SIZE))
+
+
 def _warm() -> None:
     """The second process of a first run (``python -m sciviz_gbuf.apps.demo --warmup``): the
-    demo's steps at :data:`WARMUP_SIZE` in reverse order, into a folder that is then removed."""
+    edge pass (:func:`_edge_lines_first`), then the demo's steps at :data:`WARMUP_SIZE` in
+    reverse order, into a folder that is then removed."""
     import tempfile
 
     with tempfile.TemporaryDirectory(prefix="sciviz_gbuf_warmup_") as tmp:
         out = Path(tmp)
         steps = _steps(*WARMUP_SIZE)[::-1]
-        run_steps(partial(write, item, out, WARMUP_SIZE, False) for _, write, item in steps)
+        figures = [partial(write, item, out, WARMUP_SIZE, False) for _, write, item in steps]
+        run_steps(iter([_edge_lines_first, *figures]))
 
 
 def run_demo(
@@ -759,7 +796,7 @@ def run_demo(
     finally:
         stop_warmup(second)
     scenes = [item for _, write, item in steps if write is _write_scene]
-    figures = [item for _, write, item in steps if write is _write_figure]
+    figures = _page_order([item for _, write, item in steps if write is _write_figure])
     files = [p for s in scenes for p in s.files] + [p for f in figures for _, p in f.images]
     return [*files, _write_index(scenes, figures, out)]
 
