@@ -987,15 +987,16 @@ def _crease_row(
                 )  # fmt: skip
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def _edge_pass_tasks(
     t0, t1, sz, depth, normal, m, parallel, inv_d, inv_w, jump, crease, soft, do_crease, mode,
     out_a, out_b, two, crease2, soft2, out_c, lo, hi, cos_min, cos_skip, cos_min_c, cos_skip_c,
-    cos_min2, cos_skip2,
+    cos_min2, cos_skip2, gj, ring, vring, rows, mays, dots, ins, cand,
 ):  # fmt: skip
     """Tasks ``t0 .. t1`` of :func:`edge_pass` (a band of :func:`.run_bands`): task ``t`` is the
-    rows ``t * _ROWS`` to ``(t + 1) * _ROWS``, with its own row buffers, as when each task
-    was one ``prange`` iteration (the outputs do not depend on how tasks are grouped)."""
+    rows ``t * _ROWS`` to ``(t + 1) * _ROWS``, as when each task was one ``prange`` iteration
+    (the outputs do not depend on how tasks are grouped). ``gj`` ... ``cand`` are the band's
+    row buffers (:func:`edge_pass`), set up again for each task as if it had made its own."""
     h, w = sz.shape
     for t in range(t0, t1):
         r0 = t * _ROWS
@@ -1025,28 +1026,24 @@ def _edge_pass_tasks(
                     out_c[r, c] = 0.0
         if a >= b:
             continue
-        up_g = np.empty((4, w + 2), dtype=np.float64)
-        up_j = np.empty((4, w + 2), dtype=np.float64)
-        cur_g = np.empty((4, w + 2), dtype=np.float64)
-        cur_j = np.empty((4, w + 2), dtype=np.float64)
-        S = np.empty((4, w + 4), dtype=np.float64)
-        D = np.empty((4, w + 4), dtype=np.float64)
-        V = np.empty((4, w + 4), dtype=np.bool_)
-        EX = np.empty((4, w + 4), dtype=np.float64)
-        EY = np.empty((4, w + 4), dtype=np.float64)
-        EZ = np.empty((4, w + 4), dtype=np.float64)
-        prof = np.empty(w, dtype=np.float64)
-        may_h = np.zeros(w, dtype=np.bool_)
-        may_v = np.zeros(w, dtype=np.bool_)
-        dot_h = np.ones(w, dtype=np.float32)
-        dot_v = np.ones(w, dtype=np.float32)
-        dot_d1 = np.ones(w, dtype=np.float32)
-        dot_d2 = np.ones(w, dtype=np.float32)
-        ins = np.empty(4, dtype=np.float64)
-        cand = np.zeros(w, dtype=np.uint8)
-        cre_row = np.empty(w, dtype=np.float64)
-        cre_row2 = np.empty(w, dtype=np.float64)
-        inner_row = np.empty(w, dtype=np.float64)
+        # The task's buffers (a kernel without reference counting cannot allocate): the
+        # swapped row pairs from their first rows again, and the ones it may read before
+        # writing with the values it used to allocate them with.
+        up_g, up_j, cur_g, cur_j = gj[0], gj[1], gj[2], gj[3]
+        S, D, EX, EY, EZ = ring[0], ring[1], ring[2], ring[3], ring[4]
+        V = vring
+        prof, cre_row, cre_row2, inner_row = rows[0], rows[1], rows[2], rows[3]
+        may_h, may_v = mays[0], mays[1]
+        dot_h, dot_v, dot_d1, dot_d2 = dots[0], dots[1], dots[2], dots[3]
+        one32 = np.float32(1.0)
+        for i in range(w):
+            may_h[i] = False
+            may_v[i] = False
+            dot_h[i] = one32
+            dot_v[i] = one32
+            dot_d1[i] = one32
+            dot_d2[i] = one32
+            cand[i] = 0
         for r in range(r0 - 2, r0 + 2):
             _ring_fill(
                 sz, depth, m, r, a, b, h, w, parallel, inv_d, inv_w, do_crease, S, D, V, EX, EY, EZ
@@ -1255,11 +1252,31 @@ def edge_pass(
     lo = np.empty(h, dtype=np.int64)
     hi = np.empty(h, dtype=np.int64)
     run_bands(_valid_spans, h, sz, m, lo, hi)
+    w = sz.shape[1]
     run_bands(
         _edge_pass_tasks, (h + _ROWS - 1) // _ROWS, sz, depth, normal, m, parallel, inv_d,
         inv_w, jump, crease, soft, do_crease, mode, out_a, out_b, two, crease2, soft2, out_c, lo,
         hi, cos_min, cos_skip, cos_min_c, cos_skip_c, cos_min2, cos_skip2,
+        scratch=lambda: _edge_pass_buffers(w),
     )  # fmt: skip
+
+
+def _edge_pass_buffers(w: int) -> tuple[np.ndarray, ...]:
+    """One band's row buffers of :func:`_edge_pass_tasks`: the pair gaps and jumps of two rows
+    (``gj`` up_g, up_j, cur_g, cur_j), the ring of four rows (``ring`` S, D, EX, EY, EZ and
+    ``vring`` V), the row results (prof, cre_row, cre_row2, inner_row), the crease flags
+    (may_h, may_v), the normals' dot products (dot_h, dot_v, dot_d1, dot_d2), ``ins`` and
+    ``cand``."""
+    return (
+        np.empty((4, 4, w + 2), dtype=np.float64),
+        np.empty((5, 4, w + 4), dtype=np.float64),
+        np.empty((4, w + 4), dtype=np.bool_),
+        np.empty((4, w), dtype=np.float64),
+        np.empty((2, w), dtype=np.bool_),
+        np.empty((4, w), dtype=np.float32),
+        np.empty(4, dtype=np.float64),
+        np.empty(w, dtype=np.uint8),
+    )
 
 
 @njit(cache=True)
