@@ -26,7 +26,7 @@ from .operators import (
 )
 from .reflection import highlight_lines, isophotes, reflection_angle, reflection_lines
 from .shading import lambert
-from .terrain_light import cast_shadows, sky_view
+from .terrain_light import cast_shadows, openness, sky_view
 
 __all__ = [
     "BATHYMETRIC",
@@ -54,6 +54,7 @@ __all__ = [
     "lambert",
     "modulated_hatching",
     "normalize_gradient",
+    "openness",
     "polylines_to_geojson",
     "profile_and_crease_edges",
     "profile_edges",

@@ -67,12 +67,18 @@ def _horizon_tan(
             n_in = min(n_in, int((w - 1 - j) / d_col + 1e-9))
         elif d_col < 0.0:
             n_in = min(n_in, int(j / -d_col + 1e-9))
-        for k in range(1, min(n_in, max_steps) + 1):
+        n_k = min(n_in, max_steps)
+        far = n_k * step_len
+        for k in range(1, n_k + 1):
             dist = k * step_len
             r = i + k * di
             c0, f = _sample(j, k * d_col, w)
-            # all later samples are at most this high: once the ray clears it, nothing can block
-            if min(row_ub[rw, r], col_ub[cw, c0], cell_ub) - z0 <= best * dist:
+            # all later samples are at most this high: once the ray clears it, nothing can
+            # block. Below the horizontal (best < 0) a sample further out needs less rise to
+            # raise the horizon, so the test takes the farthest one.
+            if min(row_ub[rw, r], col_ub[cw, c0], cell_ub) - z0 <= best * (
+                dist if best >= 0.0 else far
+            ):
                 break
             a = z[r, c0]
             v = a + f * (z[r, c0 + 1] - a) if f > 0.0 else a
@@ -88,11 +94,15 @@ def _horizon_tan(
             n_in = min(n_in, int((h - 1 - i) / d_row + 1e-9))
         elif d_row < 0.0:
             n_in = min(n_in, int(i / -d_row + 1e-9))
-        for k in range(1, min(n_in, max_steps) + 1):
+        n_k = min(n_in, max_steps)
+        far = n_k * step_len
+        for k in range(1, n_k + 1):
             dist = k * step_len
             c = j + k * dj
             r0, f = _sample(i, k * d_row, h)
-            if min(row_ub[rw, r0], col_ub[cw, c], cell_ub) - z0 <= best * dist:
+            if min(row_ub[rw, r0], col_ub[cw, c], cell_ub) - z0 <= best * (
+                dist if best >= 0.0 else far
+            ):
                 break
             a = z[r0, c]
             v = a + f * (z[r0 + 1, c] - a) if f > 0.0 else a
@@ -264,3 +274,84 @@ def _sky_view_rows(
                 )
                 acc += t / math.sqrt(1.0 + t * t)  # sin(atan(t)), t >= 0
             out[i, j] = 1.0 - acc / n
+
+
+def openness_kernel(
+    z: np.ndarray,
+    d_rows: np.ndarray,
+    d_cols: np.ndarray,
+    step_lens: np.ndarray,
+    row_ubs: np.ndarray,
+    col_ubs: np.ndarray,
+    row_which: np.ndarray,
+    col_which: np.ndarray,
+    local_ub: np.ndarray,
+    radius: float,
+) -> np.ndarray:
+    """Positive openness in degrees (Yokoyama et al. 2002) of every cell of ``z``: the mean
+    over the directions of ``90 - elevation angle`` of the highest sample within ``radius``
+    (the angle may be negative: a peak sees only lower ground). A ray without a sample (at
+    the grid edge, or over nodata only) counts as a horizontal horizon, 90 degrees."""
+    h, w = z.shape
+    out = np.full((h, w), np.nan, dtype=np.float32)
+    max_steps = np.array(
+        [min(math.floor(radius / float(s) * (1.0 + 1e-12)), h + w) for s in step_lens],
+        dtype=np.int64,
+    )
+    run_bands(
+        _openness_rows, h, z, d_rows, d_cols, step_lens, row_ubs, col_ubs, row_which, col_which,
+        local_ub, max_steps, out,
+    )  # fmt: skip
+    return out
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _openness_rows(
+    i0: int,
+    i1: int,
+    z: np.ndarray,
+    d_rows: np.ndarray,
+    d_cols: np.ndarray,
+    step_lens: np.ndarray,
+    row_ubs: np.ndarray,
+    col_ubs: np.ndarray,
+    row_which: np.ndarray,
+    col_which: np.ndarray,
+    local_ub: np.ndarray,
+    max_steps: np.ndarray,
+    out: np.ndarray,
+) -> None:
+    """Rows ``i0 .. i1`` of :func:`openness_kernel` into ``out`` (one band of
+    :func:`.run_bands`)."""
+    w = z.shape[1]
+    n = d_rows.shape[0]
+    for i in range(i0, i1):
+        for j in range(w):
+            if np.isnan(z[i, j]):
+                continue
+            acc = 0.0
+            for d in range(n):
+                # No floor: the highest sample may lie below the cell. No early stop at a
+                # target angle either; the bounds still end the march where nothing ahead
+                # could raise the horizon.
+                t = _horizon_tan(
+                    z,
+                    i,
+                    j,
+                    d_rows[d],
+                    d_cols[d],
+                    step_lens[d],
+                    row_ubs,
+                    row_which[d],
+                    col_ubs,
+                    col_which[d],
+                    local_ub[i, j],
+                    -np.inf,
+                    np.inf,
+                    max_steps[d],
+                )
+                if t > -np.inf:
+                    acc += 90.0 - math.degrees(math.atan(t))
+                else:
+                    acc += 90.0
+            out[i, j] = acc / n

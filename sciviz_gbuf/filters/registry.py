@@ -30,7 +30,7 @@ from .operators import (
 )
 from .reflection import isophotes, reflection_angle, reflection_lines
 from .shading import lambert
-from .terrain_light import cast_shadows, sky_view
+from .terrain_light import cast_shadows, openness, sky_view
 
 __all__ = ["FILTERS", "TAKES", "Filter"]
 
@@ -89,6 +89,7 @@ FILTERS: dict[str, Filter] = _entries(
     Filter(hillshade, "array"),
     Filter(color_bands, "array", needs_levels=True),
     Filter(sky_view, "array"),
+    Filter(openness, "array"),
     Filter(cast_shadows, "array"),
     # edges and surface analysis of a whole G-buffer
     Filter(profile_edges, "gbuffer"),

@@ -21,7 +21,7 @@ from ..errors import InputError
 from . import _terrain_light_kernels as _k
 from .hillshade import check_grid, float32_heights
 
-__all__ = ["cast_shadows", "sky_view"]
+__all__ = ["cast_shadows", "openness", "sky_view"]
 
 # sin/cos of multiples of 90 degrees are off by ~1e-16, and a sun 1e-10 degrees off north drifts
 # 3e-12 px a step: snap such components to 0 or +-1. A drift below 1e-9 px a step stays under
@@ -294,6 +294,114 @@ def sky_view(
     row_which = np.array([_which(v) for v in d_rows], dtype=np.int64)
     col_which = np.array([_which(v) for v in d_cols], dtype=np.int64)
     return _k.sky_view_kernel(
+        z,
+        d_rows,
+        d_cols,
+        step_lens,
+        _bounds(rows),
+        _bounds(cols),
+        row_which,
+        col_which,
+        _local_max(z, float(radius), float(dx), float(dy)),
+        float(radius),
+    )
+
+
+def openness(
+    heights: np.ndarray,
+    *,
+    kind: str = "positive",
+    dx: float = 1.0,
+    dy: float = 1.0,
+    directions: int = 16,
+    radius: float | None = None,
+    z_factor: float = 1.0,
+    mask: np.ndarray | None = None,
+) -> np.ndarray:
+    """Topographic openness in degrees (Yokoyama, Shirasawa & Pike 2002).
+
+    Positive openness ``Phi_L = mean_d (90 - beta_d)``, where ``beta_d`` is the largest
+    elevation angle of the terrain seen from the cell within ``radius`` (``L``) in direction d
+    (negative where all of it lies below the cell); negative openness ``Psi_L = mean_d
+    (90 + delta_d)`` with ``delta_d`` the smallest one, i.e. the positive openness of the
+    inverted terrain. Over ``directions`` azimuths ``360 k / n`` (k = 0..n-1, from north
+    clockwise), rays marched as in :func:`sky_view` (which is ``1 - mean_d sin(max(0,
+    beta_d))``). Positive openness is high on ridges and peaks, negative openness in valleys.
+
+    Parameters
+    ----------
+    heights : (H, W) array
+        Heights; row 0 is the north edge, column 0 the west edge. NaN and +-inf are nodata.
+    kind : {"positive", "negative"}, default: "positive"
+        Which openness.
+    dx, dy : float > 0, default: 1
+        Cell size east-west and north-south, in the units of the heights (metres).
+    directions : int in [1, 360], default: 16
+        Number of directions (Yokoyama et al. use 8); at most ``LIMITS["directions"]``.
+    radius : float > 0, optional
+        The distance ``L`` in metres. Default: ``50 * max(dx, dy)``, as :func:`sky_view`; at
+        most ``LIMITS["reach"]`` = 4096 cells of the finer axis.
+    z_factor : float, default: 1
+        Vertical exaggeration.
+    mask : (H, W) bool, optional
+        False marks nodata cells, like NaN heights.
+
+    Returns
+    -------
+    (H, W) float32 in [0, 180]
+        Degrees: 90 on any plane (every ray reaching ``radius`` inside the grid), more on a
+        peak (``90 + atan(slope)`` at a cone's apex), less in a pit. NaN at nodata; nodata
+        samples are skipped, and a ray with no sample (it leaves the grid at once, or meets
+        only nodata) counts as a horizontal horizon (90). Near the grid edge the rays are
+        shorter, so the values there describe less terrain.
+
+    Raises
+    ------
+    InputError
+        ``heights`` not 2-D or ``mask`` of another shape; ``kind`` not one of the two;
+        ``dx``/``dy``/``radius`` not finite and positive; ``directions`` not an integer in
+        [1, 360]; ``radius`` beyond 4096 cells; non-finite ``z_factor``.
+
+    References
+    ----------
+    .. [1] Yokoyama, R., Shirasawa, M. & Pike, R. J. (2002). Visualizing topography by
+       openness: a new application of image processing to digital elevation models.
+       Photogrammetric Engineering & Remote Sensing 68(3), 257-265.
+    .. [2] Kokalj, Ž. & Somrak, M. (2019). Why not a single image? Combining visualizations to
+       facilitate fieldwork and on-screen mapping. Remote Sensing 11(7), 747 (RVT).
+    """
+    if kind not in ("positive", "negative"):
+        raise InputError(f"kind: expected 'positive' or 'negative', got {kind!r}")
+    directions = _validate.count(directions, "directions", "directions")
+    _prepare(np.zeros((3, 3), np.float32), dx, dy, z_factor, None)  # checks dx, dy first
+    if radius is None:
+        radius = default_sky_radius(dx, dy)
+    radius = _check_radius(radius, dx, dy)
+    if _chunks.any_dask(heights, mask):
+        return _chunks.map_stencil(
+            openness,
+            {"heights": heights, "mask": mask},
+            halo=sky_view_reach(radius, dx, dy),
+            kind=kind,
+            dx=dx,
+            dy=dy,
+            directions=directions,
+            radius=radius,
+            z_factor=z_factor,
+        )
+    z = _prepare(heights, dx, dy, z_factor, mask)
+    if z.size == 0:
+        return z
+    if kind == "negative":
+        np.negative(z, out=z)  # a private copy: the openness of the inverted terrain
+    steps = [
+        _ray_steps(360.0 * k / int(directions), float(dx), float(dy)) for k in range(directions)
+    ]
+    d_rows, d_cols, step_lens = (np.array(s, dtype=np.float64) for s in zip(*steps, strict=True))
+    rows, cols = _k.line_max(z)
+    row_which = np.array([_which(v) for v in d_rows], dtype=np.int64)
+    col_which = np.array([_which(v) for v in d_cols], dtype=np.int64)
+    return _k.openness_kernel(
         z,
         d_rows,
         d_cols,

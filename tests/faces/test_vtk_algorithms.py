@@ -137,6 +137,7 @@ def _ref_array_filters(g: sg.GBuffer) -> dict[str, tuple[dict, dict, np.ndarray]
             F.normalize_gradient(g.sz, k_g=5.0, mask=m),
         ),
         "sky_view": (zsetup, {"directions": 8}, F.sky_view(z, directions=8, mask=m)),
+        "openness": (zsetup, {"directions": 8}, F.openness(z, directions=8, mask=m)),
         "cast_shadows": (zsetup, {"azimuth": 200.0}, F.cast_shadows(z, azimuth=200.0, mask=m)),
         "contour_lines": ({}, {"interval": 0.3}, F.contour_lines(g.depth, interval=0.3, mask=m)),
         "hatching": (

@@ -247,6 +247,8 @@ BEYOND = [
     ("sky_view", {"directions": 10**6}, "directions"),
     ("sky_view", {"directions": LIMITS["directions"] + 1}, "directions"),
     ("sky_view", {"radius": 1e6}, "radius"),
+    ("openness", {"directions": LIMITS["directions"] + 1}, "directions"),
+    ("openness", {"radius": 1e6}, "radius"),
     ("reflection_lines", {"stripes": 1e9}, "stripes"),
     ("reflection_lines", {"width": 1e4}, "width"),
     ("isophotes", {"width": 1e4}, "width"),
@@ -268,6 +270,7 @@ AT_BOUND = [
     ("contour_lines", {"levels": np.linspace(-50, 50, int(LIMITS["levels"])), "interval": None}),
     ("hatching", {"spacing": LIMITS["spacing"] * LIMITS["supersample"]}),
     ("sky_view", {"directions": int(LIMITS["directions"]), "radius": LIMITS["reach"]}),
+    ("openness", {"directions": int(LIMITS["directions"]), "radius": LIMITS["reach"]}),
     ("reflection_lines", {"stripes": LIMITS["levels"], "width": LINE_WIDTH}),
     ("isophotes", {"width": LINE_WIDTH}),
 ]

@@ -1,5 +1,5 @@
-"""Cast shadows and sky-view factor: analytic walls, pillars, planes, valleys and pits, and an
-independent brute-force numpy ray march."""
+"""Cast shadows, sky-view factor and openness: analytic walls, pillars, planes, valleys and
+pits, and an independent brute-force numpy ray march."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from sciviz_gbuf.errors import InputError
-from sciviz_gbuf.filters.terrain_light import cast_shadows, sky_view
+from sciviz_gbuf.filters.terrain_light import cast_shadows, openness, sky_view
 
 # ---------------------------------------------------------------------------------------------
 # independent reference: march every cell at once with numpy, no early exits
@@ -42,6 +42,10 @@ def reference_horizon(z, azimuth, dx, dy, max_dist=np.inf):
     k = 1
     while alive.any() and k <= h + w and k * step <= max_dist * (1 + 1e-12):
         r, c = ii + k * dr, jj + k * dc
+        # positions within rounding of a cell are on it (a step of 0.5000000000000002 cells
+        # lands 4e-16 beyond the first column after two steps), as in the kernels
+        r = np.where(np.abs(r - np.round(r)) < 1e-9, np.round(r), r)
+        c = np.where(np.abs(c - np.round(c)) < 1e-9, np.round(c), c)
         r0, c0 = np.floor(r).astype(int), np.floor(c).astype(int)
         fr, fc = r - r0, c - c0
         inside = (r0 >= 0) & (r0 < h) & (c0 >= 0) & (c0 < w)
@@ -407,3 +411,115 @@ def test_sky_view_odd_inputs(z, directions, radius):
     assert ((valid >= 0) & (valid <= 1)).all()
     want = reference_sky_view(z, directions, radius, 1.0, 1.0)
     np.testing.assert_allclose(out, want, atol=2e-6, equal_nan=True)
+
+
+# ---------------------------------------------------------------------------------------------
+# openness
+
+
+def reference_openness(z, directions, radius, dx, dy):
+    """Positive openness from the brute-force horizons: 90 - atan(t) per direction, 90 where a
+    ray has no sample, NaN at nodata."""
+    acc = np.zeros(z.shape)
+    for k in range(directions):
+        t = reference_horizon(z, 360.0 * k / directions, dx, dy, radius)
+        acc += np.where(np.isfinite(t), 90.0 - np.degrees(np.arctan(t)), 90.0)
+    return np.where(np.isnan(z), np.nan, acc / directions)
+
+
+@pytest.mark.parametrize("directions", [8, 16, 32])
+@pytest.mark.parametrize(("sx", "sy"), [(0.0, 0.0), (0.3, 0.1), (-1.5, 2.0)])
+def test_openness_of_a_plane_is_90_degrees(directions, sx, sy):
+    y, x = np.mgrid[0:41, 0:41].astype(np.float64)
+    z = sx * x + sy * y
+    inner = (slice(10, 31), slice(10, 31))  # every ray reaches the radius inside the grid
+    for kind in ("positive", "negative"):
+        o = openness(z, kind=kind, directions=directions, radius=8.0)
+        np.testing.assert_allclose(o[inner], 90.0, atol=1e-4)
+
+
+@pytest.mark.parametrize("slope", [0.2, 0.7, 3.0])
+def test_openness_at_a_cone_apex(slope):
+    """Eight directions on a square grid sample the cone on cells: the apex of a peak sees
+    ``-atan(slope)`` all round, a pit's ``+atan(slope)``."""
+    y, x = np.mgrid[-20:21, -20:21].astype(np.float64)
+    r = np.hypot(x, y)
+    a = math.degrees(math.atan(slope))
+    peak = openness(-slope * r, directions=8, radius=10.0)[20, 20]
+    pit = openness(slope * r, directions=8, radius=10.0)[20, 20]
+    assert peak == pytest.approx(90.0 + a, abs=1e-4)
+    assert pit == pytest.approx(90.0 - a, abs=1e-4)
+    # negative openness is the positive openness of the inverted terrain
+    assert openness(slope * r, kind="negative", directions=8, radius=10.0)[20, 20] == peak
+
+
+def test_openness_ridges_high_valleys_low():
+    x = np.mgrid[0:40, 0:40][1].astype(np.float64)
+    ridge = -np.abs(x - 20.0)  # a ridge along column 20, planes either side
+    o = openness(ridge, radius=10.0)
+    neg = openness(ridge, kind="negative", radius=10.0)
+    assert o[20, 20] > 100.0 and neg[20, 20] < 80.0  # the crest: open above, closed below
+    assert o[20, 10] == pytest.approx(90.0, abs=1e-4)  # a flank within reach is a plane
+
+
+def test_openness_matches_brute_force():
+    z = rough_terrain((37, 45), 3)
+    cases = ((1.0, 1.0, 16, 9.0), (2.0, 1.0, 8, 11.0), (1.0, 3.0, 12, 14.0))
+    for dx, dy, directions, radius in cases:
+        for kind, zz in (("positive", z), ("negative", -z)):
+            got = openness(z, kind=kind, dx=dx, dy=dy, directions=directions, radius=radius)
+            want = reference_openness(zz, directions, radius, dx, dy)
+            np.testing.assert_allclose(got, want, atol=2e-4)
+
+
+def test_openness_nodata():
+    z = rough_terrain((30, 30), 5)
+    z[10:14, 8:20] = np.nan
+    got = openness(z, directions=8, radius=6.0)
+    assert np.isnan(got[10:14, 8:20]).all() and np.isfinite(got[~np.isnan(z)]).all()
+    np.testing.assert_allclose(got, reference_openness(z, 8, 6.0, 1.0, 1.0), atol=2e-4)
+    lone = np.full((5, 5), np.nan)
+    lone[2, 2] = 4.0  # no sample in any direction: a horizontal horizon all round
+    assert openness(lone)[2, 2] == 90.0
+    mask = np.ones((9, 9), bool)
+    mask[4, 4] = False
+    assert np.isnan(openness(np.zeros((9, 9)), mask=mask)[4, 4])
+
+
+def test_openness_does_not_modify_its_input():
+    z = rough_terrain((20, 24), 7).astype(np.float64)
+    before = z.copy()
+    openness(z, kind="negative", radius=5.0)
+    np.testing.assert_array_equal(z, before)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "name"),
+    [
+        ({"kind": "both"}, "kind"),
+        ({"radius": -1.0}, "radius"),
+        ({"radius": 1e7}, "radius"),
+        ({"directions": 0}, "directions"),
+        ({"dx": 0.0}, "dx"),
+        ({"z_factor": np.inf}, "z_factor"),
+    ],
+)
+def test_openness_bad_parameters(kwargs, name):
+    with pytest.raises(InputError, match=name):
+        openness(np.zeros((4, 5)), **kwargs)
+
+
+@given(
+    z=arrays(np.float64, st.tuples(st.integers(1, 9), st.integers(1, 9)),
+             elements=st.floats(-1e3, 1e3) | st.just(np.nan)),
+    directions=st.integers(1, 12),
+    radius=st.floats(0.5, 12.0),
+)  # fmt: skip
+@settings(max_examples=60, deadline=None)
+def test_openness_odd_inputs(z, directions, radius):
+    got = openness(z, directions=directions, radius=radius)
+    assert got.shape == z.shape and got.dtype == np.float32
+    assert np.array_equal(np.isnan(got), np.isnan(z))
+    ok = ~np.isnan(got)
+    assert ((got[ok] >= 0.0) & (got[ok] <= 180.0)).all()
+    np.testing.assert_allclose(got, reference_openness(z, directions, radius, 1.0, 1.0), atol=2e-4)

@@ -22,6 +22,7 @@ from sciviz_gbuf.filters import (
     diagonal_depth_discontinuity,
     hillshade,
     normalize_gradient,
+    openness,
     second_order,
     sky_view,
     sobel_gradient,
@@ -152,6 +153,21 @@ def test_sky_view_bit_identical_and_halo_exact(rough, monkeypatch, dx, dy, radiu
     reach = mod.sky_view_reach
     monkeypatch.setattr(mod, "sky_view_reach", lambda *a: reach(*a) - 1)
     short = sky_view(da.from_array(rough, chunks=ODD), dx=dx, dy=dy, radius=radius, directions=32)
+    assert not _same(short.compute(), ref)
+
+
+@pytest.mark.parametrize("kind", ["positive", "negative"])
+@pytest.mark.parametrize(("dx", "dy", "radius"), [(1.0, 1.0, 10.5), (2.0, 1.0, 7.5)])
+def test_openness_bit_identical_and_halo_exact(rough, monkeypatch, kind, dx, dy, radius):
+    ref = openness(rough, kind=kind, dx=dx, dy=dy, radius=radius, directions=16)
+    lazy = openness(da.from_array(rough, chunks=ODD), kind=kind, dx=dx, dy=dy, radius=radius,
+                    directions=16)  # fmt: skip
+    assert _same(lazy.compute(), ref)
+    mod = _module(openness)
+    reach = mod.sky_view_reach
+    monkeypatch.setattr(mod, "sky_view_reach", lambda *a: reach(*a) - 1)
+    short = openness(da.from_array(rough, chunks=ODD), kind=kind, dx=dx, dy=dy, radius=radius,
+                     directions=16)  # fmt: skip
     assert not _same(short.compute(), ref)
 
 
