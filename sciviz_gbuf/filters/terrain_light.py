@@ -370,8 +370,7 @@ def openness(
     .. [2] Kokalj, Ž. & Somrak, M. (2019). Why not a single image? Combining visualizations to
        facilitate fieldwork and on-screen mapping. Remote Sensing 11(7), 747 (RVT).
     """
-    if kind not in ("positive", "negative"):
-        raise InputError(f"kind: expected 'positive' or 'negative', got {kind!r}")
+    kind = _validate.choice(kind, "kind", ("positive", "negative"))
     directions = _validate.count(directions, "directions", "directions")
     _prepare(np.zeros((3, 3), np.float32), dx, dy, z_factor, None)  # checks dx, dy first
     if radius is None:

@@ -497,6 +497,7 @@ def test_openness_does_not_modify_its_input():
     ("kwargs", "name"),
     [
         ({"kind": "both"}, "kind"),
+        ({"kind": np.array([2.0, 3.0])}, "kind"),
         ({"radius": -1.0}, "radius"),
         ({"radius": 1e7}, "radius"),
         ({"directions": 0}, "directions"),
