@@ -204,6 +204,15 @@ def _shadow_rows(
                 out[i, j] = (math.acos(s) - s * math.sqrt(1.0 - s * s)) / math.pi
 
 
+def _march_steps(step_lens: np.ndarray, radius: float, h: int, w: int) -> np.ndarray:
+    """The steps each direction's ray takes within ``radius`` metres (at most ``h + w``), in
+    float64 arithmetic as the band kernels used to take them."""
+    return np.array(
+        [min(math.floor(radius / float(s) * (1.0 + 1e-12)), h + w) for s in step_lens],
+        dtype=np.int64,
+    )
+
+
 def sky_view_kernel(
     z: np.ndarray,
     d_rows: np.ndarray,
@@ -218,11 +227,7 @@ def sky_view_kernel(
 ) -> np.ndarray:
     h, w = z.shape
     out = np.full((h, w), np.nan, dtype=np.float32)
-    # the steps each direction takes within the radius (float64 arithmetic, as in the kernel)
-    max_steps = np.array(
-        [min(math.floor(radius / float(s) * (1.0 + 1e-12)), h + w) for s in step_lens],
-        dtype=np.int64,
-    )
+    max_steps = _march_steps(step_lens, radius, h, w)
     run_bands(
         _sky_view_rows, h, z, d_rows, d_cols, step_lens, row_ubs, col_ubs, row_which, col_which,
         local_ub, max_steps, out,
@@ -294,10 +299,7 @@ def openness_kernel(
     the grid edge, or over nodata only) counts as a horizontal horizon, 90 degrees."""
     h, w = z.shape
     out = np.full((h, w), np.nan, dtype=np.float32)
-    max_steps = np.array(
-        [min(math.floor(radius / float(s) * (1.0 + 1e-12)), h + w) for s in step_lens],
-        dtype=np.int64,
-    )
+    max_steps = _march_steps(step_lens, radius, h, w)
     run_bands(
         _openness_rows, h, z, d_rows, d_cols, step_lens, row_ubs, col_ubs, row_which, col_which,
         local_ub, max_steps, out,

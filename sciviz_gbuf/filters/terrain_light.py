@@ -106,6 +106,30 @@ def _ray_steps(azimuth: float, dx: float, dy: float) -> tuple[float, float, floa
     return _snap(per_m_row / m), _snap(per_m_col / m), 1.0 / m
 
 
+def _sky_rays(z: np.ndarray, dx: float, dy: float, directions: int, radius: float) -> tuple:
+    """The ray arguments of the sky kernels (:func:`sky_view`, :func:`openness`) after ``z``:
+    per direction the steps (rows, columns, metres) and which bounds apply, the row and column
+    height bounds, the local maximum within ``radius``, and ``radius``."""
+    steps = [
+        _ray_steps(360.0 * k / int(directions), float(dx), float(dy)) for k in range(directions)
+    ]
+    d_rows, d_cols, step_lens = (np.array(s, dtype=np.float64) for s in zip(*steps, strict=True))
+    rows, cols = _k.line_max(z)
+    row_which = np.array([_which(v) for v in d_rows], dtype=np.int64)
+    col_which = np.array([_which(v) for v in d_cols], dtype=np.int64)
+    return (
+        d_rows,
+        d_cols,
+        step_lens,
+        _bounds(rows),
+        _bounds(cols),
+        row_which,
+        col_which,
+        _local_max(z, float(radius), float(dx), float(dy)),
+        float(radius),
+    )
+
+
 def _prepare(
     heights: np.ndarray, dx: float, dy: float, z_factor: float, mask: np.ndarray | None
 ) -> np.ndarray:
@@ -286,25 +310,7 @@ def sky_view(
     z = _prepare(heights, dx, dy, z_factor, mask)
     if z.size == 0:
         return z
-    steps = [
-        _ray_steps(360.0 * k / int(directions), float(dx), float(dy)) for k in range(directions)
-    ]
-    d_rows, d_cols, step_lens = (np.array(s, dtype=np.float64) for s in zip(*steps, strict=True))
-    rows, cols = _k.line_max(z)
-    row_which = np.array([_which(v) for v in d_rows], dtype=np.int64)
-    col_which = np.array([_which(v) for v in d_cols], dtype=np.int64)
-    return _k.sky_view_kernel(
-        z,
-        d_rows,
-        d_cols,
-        step_lens,
-        _bounds(rows),
-        _bounds(cols),
-        row_which,
-        col_which,
-        _local_max(z, float(radius), float(dx), float(dy)),
-        float(radius),
-    )
+    return _k.sky_view_kernel(z, *_sky_rays(z, dx, dy, directions, radius))
 
 
 def openness(
@@ -393,22 +399,4 @@ def openness(
         return z
     if kind == "negative":
         np.negative(z, out=z)  # a private copy: the openness of the inverted terrain
-    steps = [
-        _ray_steps(360.0 * k / int(directions), float(dx), float(dy)) for k in range(directions)
-    ]
-    d_rows, d_cols, step_lens = (np.array(s, dtype=np.float64) for s in zip(*steps, strict=True))
-    rows, cols = _k.line_max(z)
-    row_which = np.array([_which(v) for v in d_rows], dtype=np.int64)
-    col_which = np.array([_which(v) for v in d_cols], dtype=np.int64)
-    return _k.openness_kernel(
-        z,
-        d_rows,
-        d_cols,
-        step_lens,
-        _bounds(rows),
-        _bounds(cols),
-        row_which,
-        col_which,
-        _local_max(z, float(radius), float(dx), float(dy)),
-        float(radius),
-    )
+    return _k.openness_kernel(z, *_sky_rays(z, dx, dy, directions, radius))
