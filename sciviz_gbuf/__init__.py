@@ -32,6 +32,9 @@ _EXPORTS = {
     "ct_enhance": "recipes.medical",
     "surface_analysis": "recipes.surface",
     "topographic_map": "recipes.terrain",
+    "ContourLabel": "recipes.labels",
+    "contour_labels": "recipes.labels",
+    "labels_to_geojson": "recipes.labels",
     "local_client": "writers.cog",
     "write_cog": "writers.cog",
 }
@@ -44,6 +47,7 @@ _SUBMODULES = (
 __all__ = [
     "CameraInfo",
     "CaptureSession",
+    "ContourLabel",
     "GBuffer",
     "InputError",
     "OutputError",
@@ -52,7 +56,9 @@ __all__ = [
     "__version__",
     "birdseye_map",
     "capture",
+    "contour_labels",
     "ct_enhance",
+    "labels_to_geojson",
     "local_client",
     "sumi_e",
     "surface_analysis",
@@ -83,6 +89,7 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerl
     from .core.gbuffer import GBuffer
     from .errors import InputError, OutputError, RenderError, SciVizGBufError
     from .recipes.birdseye import birdseye_map, sumi_e
+    from .recipes.labels import ContourLabel, contour_labels, labels_to_geojson
     from .recipes.medical import ct_enhance
     from .recipes.surface import surface_analysis
     from .recipes.terrain import topographic_map

@@ -16,6 +16,7 @@ from ..datasets import load_jacksboro_dem
 from ..errors import InputError
 from ..readers import read_dem
 from ..recipes.birdseye import birdseye_gbuffer, birdseye_panels, sumi_e
+from ..recipes.labels import contour_labels, labels_to_geojson
 from ..recipes.terrain import topographic_map
 from ..writers.cog import (
     check_chunk_memory,
@@ -24,6 +25,7 @@ from ..writers.cog import (
     local_client,
     write_cog,
 )
+from ..writers.geojson import write_geojson
 from ._args import add_progress, number, png_output, positive_int, show_progress
 
 __all__ = ["add_birdseye", "add_topo"]
@@ -209,9 +211,16 @@ def _topo_options(args: argparse.Namespace, show: bool) -> dict:
         "variant": args.variant,
         "shadows": args.shadows,
         "sky_view": args.sky_view,
+        **_label_options(args),
         **_size_options(args),
         "progress_bar": show,
     }
+
+
+def _label_options(args: argparse.Namespace) -> dict:
+    if not args.labels:
+        return {}
+    return {"labels": True, "label_size": args.label_size, "label_spacing": args.label_spacing}
 
 
 def _topo_paths(args: argparse.Namespace) -> tuple[Path, bool]:
@@ -249,6 +258,20 @@ def _topo_paths(args: argparse.Namespace) -> tuple[Path, bool]:
             raise InputError(
                 f"--geotiff: expected a .tif/.tiff file in an existing folder, got {args.geotiff!r}"
             )
+    if args.labels_geojson is not None:
+        if not args.labels:
+            raise InputError("--labels-geojson: the labels' positions come with --labels")
+        g = Path(args.labels_geojson)
+        if g.suffix.lower() not in (".geojson", ".json") or not g.parent.is_dir():
+            raise InputError(
+                "--labels-geojson: expected a .geojson/.json file in an existing folder, got "
+                f"{args.labels_geojson!r}"
+            )
+    if args.labels and lazy:
+        raise InputError(
+            "--labels: contour labels are placed on a DEM in memory; out of core "
+            "(--chunks/--dask) maps have none"
+        )
     cluster_options = args.workers is not None or args.memory_limit is not None
     if cluster_options and args.dask != "local":
         raise InputError(
@@ -290,8 +313,14 @@ def _topo_in_memory(
             # an image of another size than the DEM covers its extent: the transform follows
             write_geotiff(args.geotiff, rgba, dem=dem)
             bar.step("geotiff")
+        if args.labels_geojson is not None:
+            opts = _topo_options(args, False)
+            keys = ("interval", "major_interval", "size", "scale", "dpi", "label_size",
+                    "label_spacing")  # fmt: skip
+            placed = contour_labels(dem, **{k: opts[k] for k in keys if k in opts})
+            write_geojson(args.labels_geojson, labels_to_geojson(placed, crs=dem.crs))
     h, w = rgba.shape[:2]
-    extra = "".join(f" and {f}" for f in (args.geotiff, args.overview) if f)
+    extra = "".join(f" and {f}" for f in (args.geotiff, args.overview, args.labels_geojson) if f)
     print(f"wrote {out}{extra} ({w}x{h}) in {time.perf_counter() - t0:.1f} s")
     return 0
 
@@ -535,6 +564,33 @@ def add_topo(sub) -> None:
     p.add_argument("--shadows", action="store_true", help="darken cast shadows")
     p.add_argument(
         "--sky-view", action="store_true", help="darken cells that see less sky (slow: ~1 MPix/s)"
+    )
+    p.add_argument(
+        "--labels",
+        action="store_true",
+        help="write the heights of the index contours into the lines (reading uphill, the "
+        "line broken under the number)",
+    )
+    p.add_argument(
+        "--label-size",
+        type=number(lambda v: v > 0, "a font size in pixels > 0"),
+        default=None,
+        metavar="PX",
+        help="label font size in output pixels (default 11; 7 pt with --scale 1:N --dpi)",
+    )
+    p.add_argument(
+        "--label-spacing",
+        type=number(lambda v: v > 0, "a distance in pixels > 0"),
+        default=None,
+        metavar="PX",
+        help="least distance between labels along a line, pixels (default 25 font sizes)",
+    )
+    p.add_argument(
+        "--labels-geojson",
+        default=None,
+        metavar="FILE.geojson",
+        help="with --labels: also write the labels as GeoJSON points (text, level, rotation) "
+        "in the DEM's CRS, for a GIS",
     )
     p.add_argument(
         "--chunks",

@@ -2,6 +2,7 @@
 
 - :mod:`.saito1990`: the panels of Saito & Takahashi's Fig. 3 and Fig. 7 (and the 2003 edge map).
 - :mod:`.terrain`: plan-view topographic maps of DEMs (bands, relief, contours; Fig. 11).
+- :mod:`.labels`: contour labels of those maps (uphill reading, knocked-out lines, GeoJSON).
 - :mod:`.birdseye`: bird's-eye maps and the sumi-e of DEMs (Figs. 12, 13).
 - :mod:`.medical`: enhanced CT surfaces (Fig. 14): profiles, shading, contours, colour bands.
 - :mod:`.surface`: surface analysis of Bezier patches (Fig. 15): reflection lines, zebra,
@@ -24,6 +25,7 @@ from ..core.framing import (
 from ..styles.illustration import STYLES, fig7_edge_map, illustrate, shade_image, signed_to_grey
 from .birdseye import birdseye_gbuffer, birdseye_layers, birdseye_map, birdseye_panels, sumi_e
 from .contour_figures import CONTOUR_CAPTIONS, fig5_panels, fig6_panels, fig11_panels, write_panels
+from .labels import ContourLabel, contour_labels, labels_to_geojson
 from .medical import ct_enhance, ct_gbuffer, ct_layers, ct_panels, ct_surface, view_camera
 from .saito1990 import CAPTIONS, fig3_panels, fig7_panels, nut_camera
 from .surface import seam_patches, surface_analysis, surface_gbuffer, surface_layers
@@ -33,10 +35,12 @@ __all__ = [
     "CAPTIONS",
     "CONTOUR_CAPTIONS",
     "STYLES",
+    "ContourLabel",
     "birdseye_gbuffer",
     "birdseye_layers",
     "birdseye_map",
     "birdseye_panels",
+    "contour_labels",
     "ct_enhance",
     "ct_gbuffer",
     "ct_layers",
@@ -50,6 +54,7 @@ __all__ = [
     "fig11_panels",
     "framed_camera",
     "illustrate",
+    "labels_to_geojson",
     "map_grid",
     "named_view_camera",
     "nice_intervals",

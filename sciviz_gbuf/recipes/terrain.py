@@ -32,6 +32,7 @@ from ._map import (
     map_min_ring,
 )
 from ._resample import check_size_options, map_grid, resample_heights
+from .labels import draw_labels, label_boxes, label_options, labels_of_grid
 from .terrain_chunked import lazy_topographic_map
 
 __all__ = [
@@ -72,6 +73,10 @@ def topographic_map(
     variant: str = "regular",
     shadows: bool = False,
     sky_view: bool = False,
+    labels: bool = False,
+    label_size: float | None = None,
+    label_spacing: float | None = None,
+    label_color: Sequence[float] | None = None,
     size: int | Sequence[int] | None = None,
     scale: float | str | None = None,
     dpi: float | None = None,
@@ -134,6 +139,17 @@ def topographic_map(
     sky_view : bool, default: False
         Darken cells that see less of the sky (valleys, pits; rayshader's ``ambient_shade``).
         Slow: about 1 MPix/s (16 directions, 50 cells out), minutes for a large DEM.
+    labels : bool, default: False
+        Write the heights of the index (major) contours into the lines
+        (:func:`~sciviz_gbuf.recipes.labels.contour_labels` gives the placements): the text
+        follows the line with its top uphill, the line is knocked out under it, labels keep
+        ``label_spacing`` apart along a line and clear of each other, of the frame, of nodata
+        and of the other index contours. In memory only (not for a DEM read in chunks).
+    label_size, label_spacing : float, optional
+        Font height in output pixels (default 11 px; 7 pt with a map scale's ``dpi``) and the
+        least distance between labels along a line (default 25 font sizes).
+    label_color : RGB, optional
+        Colour of the label text (default ``contour_color``).
     size : int or (int, int), optional
         Output size in pixels: ``N`` the long side (the other keeps the grid's aspect, GDAL's
         ``-outsize N 0``); ``(W, H)`` exactly, over the DEM's extent (``-outsize W H``; pixels
@@ -179,7 +195,15 @@ def topographic_map(
     check_line_sizes(width=width, major_width=major_width, dense_spacing=dense_spacing)
     check_size_options(size, scale, dpi)
     z_factor = check_z_factor(z_factor)
+    labels = _validate.boolean(labels, "labels")
+    font_px, spacing_px = label_options(label_size, label_spacing, dpi if scale else None)
+    text_colour = colour if label_color is None else _validate.rgb(label_color, "label_color")
     d = as_dem(dem)
+    if labels and _dask.is_dask(d.heights):
+        raise InputError(
+            f"labels: {d.source or 'the DEM'} is read in chunks (out of core); contour labels "
+            "are placed on a DEM in memory (read it without chunks=)"
+        )
     if not _dask.is_dask(d.mask) and not d.mask.any():
         # A fully transparent picture would look like success.
         raise InputError(f"{d.source or 'heights'}: every cell is nodata: nothing to map")
@@ -213,7 +237,15 @@ def topographic_map(
         bar.step("contours")
         dx, dy = d.pixel_size
         layers = map_layers(d.heights, dx=dx, dy=dy, **options, bar=bar)
+        placed = []
+        if labels:
+            placed = labels_of_grid(d, interval, major_interval, font_px, spacing_px)
+            if layers["ink"] is not None:
+                # the line is broken under the label (every line there, as a cartographer's mask)
+                layers["ink"] = layers["ink"] * (1.0 - label_boxes(placed, d.shape))
         bar.step("composite")
         out = composite(layers, d.heights, colour)
+        if placed:
+            out = draw_labels(out, placed, font_px, text_colour)
         bar.step("done")
     return out
