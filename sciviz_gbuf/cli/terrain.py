@@ -17,6 +17,7 @@ from ..errors import InputError
 from ..readers import read_dem
 from ..recipes.birdseye import birdseye_gbuffer, birdseye_panels, sumi_e
 from ..recipes.labels import contour_labels, labels_to_geojson
+from ..recipes.layout import PAGES, write_map_page
 from ..recipes.terrain import topographic_map
 from ..writers.cog import (
     check_chunk_memory,
@@ -229,6 +230,11 @@ def _topo_paths(args: argparse.Namespace) -> tuple[Path, bool]:
     out = Path(args.output)
     suffix = out.suffix.lower()
     lazy = args.chunks is not None or args.dask is not None
+    if args.page is not None:
+        _check_page(args, out, lazy)
+        return out, False
+    if args.landscape or args.title is not None or args.credit is not None:
+        raise InputError("--landscape/--title/--credit: these lay out a page: add --page A4")
     if suffix not in (".png", ".tif", ".tiff"):
         raise InputError(
             f"--output: expected a file name ending in .png or .tif, got {args.output!r}"
@@ -280,6 +286,41 @@ def _topo_paths(args: argparse.Namespace) -> tuple[Path, bool]:
     return out, tif
 
 
+def _check_page(args: argparse.Namespace, out: Path, lazy: bool) -> None:
+    """``--page``: a .png or .pdf in an existing folder, in memory, sized by its scale."""
+    if out.suffix.lower() not in (".png", ".pdf"):
+        raise InputError(f"--output: a page is written as .png or .pdf, got {args.output!r}")
+    if not out.parent.is_dir():
+        raise InputError(f"--output: no such directory {str(out.parent)!r}")
+    if lazy:
+        raise InputError("--page: a page layout is drawn in memory (not with --chunks/--dask)")
+    if args.size is not None:
+        raise InputError("--size: a page's map is sized by its scale (--scale 1:N) and --dpi")
+    if args.scale is not None and not str(args.scale).startswith("1:"):
+        raise InputError(f"--scale: a page needs a map scale 1:N, got {args.scale!r}")
+    for flag, value in (("--geotiff", args.geotiff), ("--overview", args.overview),
+                        ("--labels-geojson", args.labels_geojson)):  # fmt: skip
+        if value is not None:
+            raise InputError(f"{flag}: not with --page (write the map without --page)")
+
+
+def _topo_page(args: argparse.Namespace, source, out: Path, show: bool, t0: float) -> int:
+    opts = _topo_options(args, show)
+    for key in ("size", "scale", "dpi", "progress_bar", "labels", "label_size",
+                "label_spacing"):  # fmt: skip
+        opts.pop(key, None)
+    with progress(show, 2, "topo page") as bar:
+        dem = _read_terrain(source, args.geographic)
+        bar.step("page")
+        w, h = write_map_page(
+            out, dem, page=args.page, landscape=args.landscape, dpi=args.dpi or 300.0,
+            scale=args.scale, title=args.title, credit=args.credit, labels=args.labels,
+            **opts,
+        )  # fmt: skip
+    print(f"wrote {out} ({args.page}, {w}x{h} px) in {time.perf_counter() - t0:.1f} s")
+    return 0
+
+
 def _cmd_topo(args: argparse.Namespace) -> int:
     out, tif = _topo_paths(args)
     source = None if not args.dem else args.dem[0] if len(args.dem) == 1 else list(args.dem)
@@ -290,6 +331,8 @@ def _cmd_topo(args: argparse.Namespace) -> int:
     # A first run compiles the map's kernels: the ones it needs last compile on the other core.
     second = start_warmup(["sciviz_gbuf.apps.warmup", "topo"], job="topo")
     try:
+        if args.page is not None:
+            return _topo_page(args, source, out, show, t0)
         return _topo_in_memory(args, source, out, tif, show, t0)
     finally:
         stop_warmup(second)
@@ -592,6 +635,16 @@ def add_topo(sub) -> None:
         help="with --labels: also write the labels as GeoJSON points (text, level, rotation) "
         "in the DEM's CRS, for a GIS",
     )
+    p.add_argument(
+        "--page",
+        choices=sorted(PAGES),
+        default=None,
+        help="a print layout: the map at a round scale (or --scale 1:N) on this page with a "
+        "legend, scale bar, north arrow, title and credit; -o .png or .pdf; --dpi default 300",
+    )
+    p.add_argument("--landscape", action="store_true", help="with --page: landscape")
+    p.add_argument("--title", default=None, help="with --page: the title above the map")
+    p.add_argument("--credit", default=None, help="with --page: a credit line (data sources)")
     p.add_argument(
         "--chunks",
         type=_chunks_arg,

@@ -1,0 +1,281 @@
+"""Print layouts of topographic maps: the map at a stated scale on a page, with its legend,
+scale bar, north arrow, title and credit line (PNG or PDF).
+
+The map is drawn by :func:`~sciviz_gbuf.recipes.terrain.topographic_map` at the page's
+resolution and a round map scale (1:N with N 1, 2, 2.5 or 5 times a power of ten, the
+smallest at which the DEM's extent fits the map frame, or the scale asked for), so one map
+pixel is one page pixel: it is placed unresampled (PNG) or embedded at that resolution (PDF).
+The furniture below the frame is drawn with matplotlib as vector graphics (text in DejaVu
+Sans): the hypsometric legend (:func:`~.furniture.legend_classes`, with the contour
+interval), the scale bar (:func:`~.furniture.scale_bar`), the north arrow and the scale.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+
+from .. import _validate
+from .._atomic import atomic_output
+from ..errors import InputError
+from ..readers import DEM
+from ._intervals import contour_intervals
+from ._map import as_dem
+from ._resample import map_grid
+from .furniture import legend_classes, scale_bar
+from .terrain import topographic_map
+
+__all__ = ["PAGES", "map_page", "page_scale", "write_map_page"]
+
+#: Page sizes, (width, height) in millimetres, portrait.
+PAGES = {"A4": (210.0, 297.0), "A3": (297.0, 420.0), "letter": (215.9, 279.4)}
+#: Page margin, mm.
+MARGIN_MM = 12.0
+#: Height of the furniture strip below the map frame, mm.
+STRIP_MM = 34.0
+#: Height of the title line, mm (when there is a title).
+TITLE_MM = 12.0
+_MM = 0.001  # metres per millimetre
+
+
+def _frame_mm(page: str, landscape: bool, title: bool) -> tuple[float, float, float, float]:
+    """``(page_w, page_h, frame_w, frame_h)`` in mm."""
+    pw, ph = PAGES[page]
+    if landscape:
+        pw, ph = ph, pw
+    fw = pw - 2 * MARGIN_MM
+    fh = ph - 2 * MARGIN_MM - STRIP_MM - (TITLE_MM if title else 0.0)
+    return pw, ph, fw, fh
+
+
+def _round_scale(n: float) -> int:
+    """The smallest of 1, 2, 2.5, 5 times a power of ten that is >= ``n``."""
+    e = math.floor(math.log10(n))
+    for k in (e, e + 1):
+        for m in (1.0, 2.0, 2.5, 5.0, 10.0):
+            if m * 10.0**k >= n * (1 - 1e-12):
+                return round(m * 10.0**k)
+    return round(10.0 ** (e + 1))  # pragma: no cover - the loop always returns
+
+
+def page_scale(dem: DEM, page: str = "A4", *, landscape: bool = False, title: bool = False) -> int:
+    """The map scale denominator N of :func:`map_page`: the smallest round 1:N at which the
+    DEM's extent (its cells times their size in metres) fits the page's map frame."""
+    _, _, fw, fh = _frame_mm(page, landscape, title)
+    h, w = dem.shape
+    ground_w, ground_h = w * dem.pixel_size[0], h * dem.pixel_size[1]
+    return _round_scale(max(ground_w / (fw * _MM), ground_h / (fh * _MM)))
+
+
+def _parse_scale(scale: object) -> int | None:
+    if scale is None:
+        return None
+    text = str(scale).strip()
+    value = text.partition(":")[2] if ":" in text else text
+    try:
+        n = float(value)
+    except ValueError:
+        n = float("nan")
+    if not (math.isfinite(n) and n >= 1 and (":" not in text or text.startswith("1:"))):
+        raise InputError(f"scale: expected a map scale 1:N such as 1:25000, got {scale!r}")
+    return round(n)
+
+
+def _north_note(d: DEM) -> tuple[float, str]:
+    """The direction of true north on the map (degrees from the page's up, clockwise) and a
+    note: on geographic grids north is up; on projected grids the arrow shows grid north and
+    the note gives the convergence at the centre when the CRS can be transformed (rasterio)."""
+    if d.geographic:
+        return 0.0, "True north"
+    if not d.crs:
+        return 0.0, "Grid north"
+    try:
+        from rasterio.crs import CRS
+        from rasterio.warp import transform
+    except ImportError:
+        return 0.0, "Grid north"
+    h, w = d.shape
+    x0, dx, rx, y0, ry, dy = d.transform
+    cx, cy = x0 + w / 2 * dx + h / 2 * rx, y0 + w / 2 * ry + h / 2 * dy
+    try:
+        src = CRS.from_user_input(d.crs)
+        lon, lat = transform(src, "EPSG:4326", [cx], [cy])
+        step = 0.01
+        xs, ys = transform("EPSG:4326", src, [lon[0]], [min(lat[0] + step, 89.99)])
+    except Exception:
+        return 0.0, "Grid north"
+    gamma = math.degrees(math.atan2(xs[0] - cx, ys[0] - cy))
+    side = "E" if gamma >= 0 else "W"
+    return gamma, f"Grid north; true north {abs(gamma):.1f}\u00b0 {side}"
+
+
+def map_page(
+    dem: DEM | str | os.PathLike | np.ndarray,
+    *,
+    page: str = "A4",
+    landscape: bool = False,
+    dpi: float = 300.0,
+    scale: str | int | None = None,
+    title: str | None = None,
+    credit: str | None = None,
+    labels: bool = True,
+    legend: bool = True,
+    **map_options,
+):
+    """A matplotlib Figure of a print layout: the map at a round scale inside a frame, the
+    furniture below it (legend, scale bar, north arrow, scale, credit), the title above.
+
+    Parameters
+    ----------
+    dem : DEM, path, array or xarray.DataArray
+    page : {'A4', 'A3', 'letter'}
+    landscape : bool
+    dpi : float, default: 300
+        The page's resolution (and the map's: one map pixel per page pixel), at most
+        ``LIMITS["dpi"]``; the page must stay within ``LIMITS["image_side"]`` pixels a side.
+    scale : '1:N' or N, optional
+        The map scale; default the smallest round scale at which the map fits the frame.
+        A scale at which it does not fit is refused.
+    title, credit : str, optional
+    labels, legend : bool
+        Contour labels (7 pt) and the hypsometric legend.
+    **map_options
+        Of :func:`~sciviz_gbuf.recipes.terrain.topographic_map` (intervals, bands, cmap,
+        relief, ...), but not ``size``/``scale``/``dpi``.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        With ``fig.sciviz_map = (image, (x0, y0), N)``: the map image, its lower-left corner
+        in page pixels and the scale denominator.
+    """
+    from matplotlib.figure import Figure
+    from matplotlib.patches import Polygon, Rectangle
+
+    page = _validate.choice(page, "page", tuple(PAGES))
+    landscape = _validate.boolean(landscape, "landscape")
+    labels = _validate.boolean(labels, "labels")
+    legend = _validate.boolean(legend, "legend")
+    dpi = _validate.size(dpi, "dpi", "dpi")
+    for key in ("size", "scale", "dpi", "progress_bar"):
+        if key in map_options:
+            raise InputError(f"{key}: a page's map is sized by its scale and dpi, not by {key}=")
+    for name, text in (("title", title), ("credit", credit)):
+        if text is not None and (not isinstance(text, str) or len(text) > 500):
+            raise InputError(f"{name}: expected a string of at most 500 characters")
+    pw, ph, fw, fh = _frame_mm(page, landscape, bool(title))
+    side = max(pw, ph) / 25.4 * dpi
+    if side > _validate.LIMITS["image_side"]:
+        raise InputError(
+            f"dpi: a {page} page at {dpi:g} dpi is {side:.0f} px long; expected at most "
+            f"{int(_validate.LIMITS['image_side'])} (LIMITS['image_side'])"
+        )
+    d = as_dem(dem)
+    n = _parse_scale(scale) or page_scale(d, page, landscape=landscape, title=bool(title))
+    h, w = d.shape
+    map_w_mm = w * d.pixel_size[0] / n / _MM
+    map_h_mm = h * d.pixel_size[1] / n / _MM
+    if map_w_mm > fw * 1.0001 or map_h_mm > fh * 1.0001:
+        raise InputError(
+            f"scale: at 1:{n} the map is {map_w_mm:.0f} x {map_h_mm:.0f} mm; the {page} "
+            f"page's map frame is {fw:.0f} x {fh:.0f} mm (a smaller scale, 1:N with a larger N)"
+        )
+    scale_text = f"1:{n}"
+    opts = {"scale": scale_text, "dpi": dpi}
+    img = topographic_map(d, labels=labels, **opts, **map_options)
+    grid = map_grid(d, **opts)
+    ih, iw = img.shape[:2]
+    fig = Figure(figsize=(pw / 25.4, ph / 25.4), dpi=dpi)
+    fig.patch.set_facecolor("white")
+    px = dpi / 25.4  # page pixels per mm
+    # the map centred across its frame, at its top, at whole page pixels (placed as it is: no
+    # resampling); the furniture follows right under it
+    frame_x0 = MARGIN_MM + (fw - iw / px) / 2
+    frame_y0 = MARGIN_MM + STRIP_MM + fh - ih / px
+    x0, y0 = round(frame_x0 * px), round(frame_y0 * px)
+    fig.figimage(img, xo=x0, yo=y0, origin="upper", resize=False, zorder=1)
+    fx, fy = x0 / px / pw, y0 / px / ph  # figure fractions of the map's corner
+    fwid, fhgt = iw / px / pw, ih / px / ph
+    fig.add_artist(Rectangle((fx, fy), fwid, fhgt, transform=fig.transFigure, fill=False,
+                             lw=0.8, ec="black", zorder=3))  # fmt: skip
+
+    def at(x_mm: float, y_mm: float) -> tuple[float, float]:
+        return x_mm / pw, y_mm / ph
+
+    if title:
+        fig.text(*at(pw / 2, ph - MARGIN_MM - TITLE_MM / 2), title, ha="center", va="center",
+                 fontsize=16, family="DejaVu Sans")  # fmt: skip
+    strip_top = y0 / px - 6.0
+    # legend: swatches left to right with their edges
+    _lo, _hi, minor, major = contour_intervals(
+        grid.heights, map_options.get("interval"), map_options.get("major_interval")
+    )
+    if legend:
+        keys = ("interval", "major_interval", "bands", "cmap", "sea_level", "vmin", "vmax")
+        classes = legend_classes(grid, **{k: map_options[k] for k in keys if k in map_options})
+        if classes:
+            n_cls = len(classes)
+            width = min(8.0, (pw * 0.55) / n_cls)
+            for i, c in enumerate(classes):
+                fig.add_artist(Rectangle(at(MARGIN_MM + i * width, strip_top - 8.0),
+                                         width / pw, 6.0 / ph, transform=fig.transFigure,
+                                         fc=np.array(c.rgb) / 255.0, ec="none"))  # fmt: skip
+            # the inner edges are the band edges (the outer ones the data's range)
+            step = max(1, math.ceil(n_cls / 8))
+            for i in range(1, n_cls, step):
+                fig.text(*at(MARGIN_MM + i * width, strip_top - 8.6), f"{classes[i].low:g}",
+                         ha="center", va="top", fontsize=6)  # fmt: skip
+            fig.text(*at(MARGIN_MM, strip_top + 0.5), "Height (m)", ha="left", va="top",
+                     fontsize=7)  # fmt: skip
+    interval_text = f"Contour interval {minor:g} m" + (
+        f", index contours every {major:g} m" if major is not None else ""
+    )
+    fig.text(*at(MARGIN_MM, strip_top - 17.0), interval_text, ha="left", va="top", fontsize=7)
+    # scale bar: two halves, black and white, at the map's scale
+    bar = scale_bar(grid, fraction=0.3)
+    bar_mm = bar.pixels / px
+    bx = pw * 0.62
+    for k in range(4):
+        fig.add_artist(Rectangle(at(bx + k * bar_mm / 4, strip_top - 6.0), bar_mm / 4 / pw,
+                                 1.6 / ph, transform=fig.transFigure,
+                                 fc="black" if k % 2 == 0 else "white", ec="black",
+                                 lw=0.5))  # fmt: skip
+    for k, frac in enumerate((0.0, 0.5, 1.0)):
+        v = bar.metres * frac
+        text = bar.text if k == 2 else (f"{v / 1000:g}" if bar.metres >= 1000 else f"{v:g}")
+        fig.text(*at(bx + frac * bar_mm, strip_top - 7.0), text, ha="center", va="top",
+                 fontsize=6)  # fmt: skip
+    fig.text(*at(bx + bar_mm / 2, strip_top - 1.5), f"Scale {n:,}".replace(",", "\u2009")
+             .replace("Scale ", "Scale 1:"), ha="center", va="top", fontsize=8)  # fmt: skip
+    # north arrow
+    _gamma, note = _north_note(grid)
+    ax_, ay_ = pw - MARGIN_MM - 5.0, strip_top - 9.0
+    tri = np.array([[0.0, 7.0], [-2.2, 0.0], [0.0, 1.6], [2.2, 0.0]])
+    fig.add_artist(Polygon([at(ax_ + x, ay_ + y) for x, y in tri], closed=True,
+                           transform=fig.transFigure, fc="black", ec="black"))  # fmt: skip
+    fig.text(*at(ax_, ay_ + 8.0), "N", ha="center", va="bottom", fontsize=9, weight="bold")
+    fig.text(*at(ax_ + 3.0, ay_ - 2.0), note, ha="right", va="top", fontsize=5.5)
+    if credit:
+        fig.text(*at(MARGIN_MM, strip_top - 22.0), credit, ha="left", va="top", fontsize=6,
+                 color="0.3")  # fmt: skip
+    fig.sciviz_map = (img, (x0, y0), n)
+    return fig
+
+
+def write_map_page(path: str | os.PathLike, dem, **options) -> tuple[int, int]:
+    """Write :func:`map_page` as PNG or PDF (by the suffix), all or nothing; returns the page
+    size in pixels at its dpi."""
+    suffix = Path(path).suffix.lower()
+    if suffix not in (".png", ".pdf"):
+        raise InputError(f"output: expected a .png or .pdf file for a page, got {str(path)!r}")
+    fig = map_page(dem, **options)
+    dpi = fig.dpi
+    with atomic_output(path) as part:
+        with open(part.path, "wb") as f:
+            meta = {"Creator": "sciviz-gbuf"} if suffix == ".pdf" else None
+            fig.savefig(f, format=suffix[1:], dpi=dpi, facecolor="white", metadata=meta)
+    w, h = fig.get_size_inches() * dpi
+    return int(w), int(h)  # as Agg sizes the canvas (truncated)
