@@ -87,7 +87,7 @@ def problems(labels, z: np.ndarray, step: float, spacing: float) -> dict[str, li
                 out["overlap"].append((labels[i], labels[j]))
     lo, hi = np.nanmin(z), np.nanmax(z)
     levels = np.arange(math.ceil(lo / step), math.floor(hi / step) + 1) * step
-    for line in contour_polylines(z, levels=levels):
+    for line in contour_polylines(z, levels=levels) if levels.size else []:
         length = float(np.hypot(*np.diff(line.points, axis=0).T).sum())
         if length <= 3 * spacing:
             continue
