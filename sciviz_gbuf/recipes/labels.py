@@ -39,7 +39,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from .. import _validate
+from .. import _dask, _validate
 from ..errors import InputError
 from ..filters import contour_polylines
 from ..readers import DEM
@@ -49,6 +49,7 @@ from ._resample import map_grid
 
 __all__ = [
     "ContourLabel",
+    "check_in_memory",
     "contour_labels",
     "draw_labels",
     "label_boxes",
@@ -307,19 +308,26 @@ def _box_samples(centre: np.ndarray, d: np.ndarray, half: float, hh: float):
     return x.ravel(), y.ravel(), vv.ravel()
 
 
+def _box_uv(shape: Sequence[int], x: float, y: float, d: Sequence[float], reach: float):
+    """The window of a grid around a box centred at ``(x, y)`` with baseline ``d`` (image
+    coordinates), ``reach`` pixels each way: ``(rows, cols, u, v)``, the window's slices and
+    each pixel centre's offset along and across the baseline; None outside the grid."""
+    h, w = int(shape[0]), int(shape[1])
+    c0, c1 = max(0, int(x - reach)), min(w, int(x + reach) + 2)
+    r0, r1 = max(0, int(y - reach)), min(h, int(y + reach) + 2)
+    if c0 >= c1 or r0 >= r1:
+        return None
+    yy, xx = np.mgrid[r0:r1, c0:c1]
+    px, py = xx - x, yy - y
+    return slice(r0, r1), slice(c0, c1), px * d[0] + py * d[1], px * d[1] - py * d[0]
+
+
 def _stamp(grid: np.ndarray, centre: np.ndarray, d: np.ndarray, half: float, hh: float) -> None:
     """Mark the pixels whose centres lie in a box on a boolean grid."""
-    h, w = grid.shape
-    r = math.hypot(half, hh) + 1.0
-    c0, c1 = max(0, int(centre[0] - r)), min(w, int(centre[0] + r) + 2)
-    r0, r1 = max(0, int(centre[1] - r)), min(h, int(centre[1] + r) + 2)
-    if c0 >= c1 or r0 >= r1:
-        return
-    yy, xx = np.mgrid[r0:r1, c0:c1]
-    px, py = xx - centre[0], yy - centre[1]
-    u = px * d[0] + py * d[1]
-    v = px * d[1] - py * d[0]
-    grid[r0:r1, c0:c1] |= (np.abs(u) <= half) & (np.abs(v) <= hh)
+    box = _box_uv(grid.shape, centre[0], centre[1], d, math.hypot(half, hh) + 1.0)
+    if box is not None:
+        rows, cols, u, v = box
+        grid[rows, cols] |= (np.abs(u) <= half) & (np.abs(v) <= hh)
 
 
 def place_labels(
@@ -489,14 +497,20 @@ def contour_labels(
     lines are traced on the whole grid in memory.
     """
     font_px, spacing_px = label_options(label_size, label_spacing, dpi if scale else None)
-    d = as_dem(dem)
-    if not isinstance(d.heights, np.ndarray):
+    d = check_in_memory(as_dem(dem))
+    d = map_grid(d, size=size, scale=scale, dpi=dpi)
+    return labels_of_grid(d, interval, major_interval, font_px, spacing_px)
+
+
+def check_in_memory(d: DEM) -> DEM:
+    """``d`` itself if its heights are in memory; an InputError for a DEM read in chunks
+    (labels are placed on the whole grid's contour lines)."""
+    if _dask.is_dask(d.heights):
         raise InputError(
             f"labels: {d.source or 'the DEM'} is read in chunks (out of core); contour labels "
             "are placed on a DEM in memory (read it without chunks=)"
         )
-    d = map_grid(d, size=size, scale=scale, dpi=dpi)
-    return labels_of_grid(d, interval, major_interval, font_px, spacing_px)
+    return d
 
 
 def labels_of_grid(
@@ -514,23 +528,17 @@ def labels_of_grid(
 def label_boxes(labels: Sequence[ContourLabel], shape: Sequence[int]) -> np.ndarray:
     """(H, W) float32 coverage in [0, 1] of the labels' boxes (antialiased edges, exactly 1
     inside): what :func:`draw_labels` knocks out of the contour ink."""
-    h, w = int(shape[0]), int(shape[1])
-    cover = np.zeros((h, w), np.float32)
+    cover = np.zeros((int(shape[0]), int(shape[1])), np.float32)
     for lab in labels:
         a = math.radians(lab.angle)
         d = (math.cos(a), -math.sin(a))  # baseline in image coordinates
         half, hh = lab.width / 2, lab.height / 2
-        r = math.hypot(half, hh) + 2.0
-        c0, c1 = max(0, int(lab.x - r)), min(w, int(lab.x + r) + 2)
-        r0, r1 = max(0, int(lab.y - r)), min(h, int(lab.y + r) + 2)
-        if c0 >= c1 or r0 >= r1:
+        box = _box_uv(cover.shape, lab.x, lab.y, d, math.hypot(half, hh) + 2.0)
+        if box is None:
             continue
-        yy, xx = np.mgrid[r0:r1, c0:c1]
-        px, py = xx - lab.x, yy - lab.y
-        u = np.abs(px * d[0] + py * d[1])
-        v = np.abs(px * d[1] - py * d[0])
-        c = np.clip(half + 0.5 - u, 0, 1) * np.clip(hh + 0.5 - v, 0, 1)
-        np.maximum(cover[r0:r1, c0:c1], c.astype(np.float32), out=cover[r0:r1, c0:c1])
+        rows, cols, u, v = box
+        c = np.clip(half + 0.5 - np.abs(u), 0, 1) * np.clip(hh + 0.5 - np.abs(v), 0, 1)
+        np.maximum(cover[rows, cols], c.astype(np.float32), out=cover[rows, cols])
     return cover
 
 

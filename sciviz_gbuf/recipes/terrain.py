@@ -32,7 +32,7 @@ from ._map import (
     map_min_ring,
 )
 from ._resample import check_size_options, map_grid, resample_heights
-from .labels import draw_labels, label_boxes, label_options, labels_of_grid
+from .labels import check_in_memory, draw_labels, label_boxes, label_options, labels_of_grid
 from .terrain_chunked import lazy_topographic_map
 
 __all__ = [
@@ -199,11 +199,8 @@ def topographic_map(
     font_px, spacing_px = label_options(label_size, label_spacing, dpi if scale else None)
     text_colour = colour if label_color is None else _validate.rgb(label_color, "label_color")
     d = as_dem(dem)
-    if labels and _dask.is_dask(d.heights):
-        raise InputError(
-            f"labels: {d.source or 'the DEM'} is read in chunks (out of core); contour labels "
-            "are placed on a DEM in memory (read it without chunks=)"
-        )
+    if labels:
+        check_in_memory(d)
     if not _dask.is_dask(d.mask) and not d.mask.any():
         # A fully transparent picture would look like success.
         raise InputError(f"{d.source or 'heights'}: every cell is nodata: nothing to map")
