@@ -54,6 +54,8 @@ _TEMPORARY = re.compile(r"[^\s'\"]*\.[0-9a-f]{8}(?:\.\w+)?\.part\b")
 _GROUPS: list[list[tuple[Part, bool]]] = []
 #: Serialises the redirection of file descriptor 2, which is one per process.
 _FD2_LOCK = threading.RLock()
+#: Depth of :func:`_signals_deferred` blocks and the signals that arrived inside them.
+_DEFER = {"depth": 0, "pending": []}
 
 
 class Interrupted(BaseException):
@@ -80,10 +82,36 @@ class Interrupted(BaseException):
 
 
 def _raise_interrupted(signum: int, frame: FrameType | None) -> None:
+    if _DEFER["depth"]:
+        # Inside the redirection or restoration of descriptor 2 (see _signals_deferred):
+        # raised again once that is whole.
+        _DEFER["pending"].append(signum)
+        return
     # A second signal of the same kind ends the process the default way, so that a clean-up
     # that hangs can still be stopped.
     signal.signal(signum, signal.SIG_DFL)
     raise Interrupted(signum)
+
+
+@contextmanager
+def _signals_deferred() -> Iterator[None]:
+    """Within the block, a signal of :func:`raising_signals` is held and raised as the block
+    ends. For the few steps that swap descriptor 2 and ``sys.stderr``: an exception between
+    two of them would leave descriptor 2 in the capture file, and the error line of the
+    interruption would be written there, not to the terminal. Handlers run in the main thread
+    only: a signal held for another thread's block is sent again (``raise_signal``) when it
+    ends, and the handler then raises it in the main thread."""
+    with _FD2_LOCK:
+        _DEFER["depth"] += 1
+        try:
+            yield
+        finally:
+            _DEFER["depth"] -= 1
+            pending = [] if _DEFER["depth"] else _DEFER["pending"][:]
+            if pending:
+                _DEFER["pending"].clear()
+    for signum in dict.fromkeys(pending):
+        signal.raise_signal(signum)
 
 
 @contextmanager
@@ -161,27 +189,34 @@ def _fd2_captured(box: list[str]) -> Iterator[None]:
                 tmp.close()
             yield
             return
-        _flush_stderr()
-        os.dup2(sink, 2)
-        python_stderr = _bypass(saved)
+        python_stderr = None
+        redirected = False
         try:
+            with _signals_deferred():
+                _flush_stderr()
+                os.dup2(sink, 2)
+                redirected = True
+                python_stderr = _bypass(saved)
             yield
         finally:
-            _flush_stderr()
-            if python_stderr is not None:
-                sys.stderr, bypass = python_stderr, sys.stderr
-                bypass.close()
-            os.dup2(saved, 2)
-            os.close(saved)
-            size = os.lseek(sink, 0, os.SEEK_END)
-            os.lseek(sink, 0, os.SEEK_SET)
-            data = os.read(sink, size) if size else b""
-            if tmp is not None:
-                tmp.close()
-            else:
-                os.close(sink)
-            if data.strip():
-                box.append(data.decode("utf-8", errors="replace"))
+            # All of the restoration, or none of it, before a signal is raised.
+            with _signals_deferred():
+                _flush_stderr()
+                if python_stderr is not None:
+                    sys.stderr, bypass = python_stderr, sys.stderr
+                    bypass.close()
+                if redirected:
+                    os.dup2(saved, 2)
+                os.close(saved)
+                size = os.lseek(sink, 0, os.SEEK_END)
+                os.lseek(sink, 0, os.SEEK_SET)
+                data = os.read(sink, size) if size else b""
+                if tmp is not None:
+                    tmp.close()
+                else:
+                    os.close(sink)
+                if data.strip():
+                    box.append(data.decode("utf-8", errors="replace"))
 
 
 @contextmanager

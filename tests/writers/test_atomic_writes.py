@@ -28,6 +28,7 @@ import pytest
 from sciviz_gbuf._atomic import (
     Interrupted,
     atomic_output,
+    native_stderr,
     one_line,
     output_group,
     raising_signals,
@@ -533,3 +534,39 @@ def test_a_signal_during_a_long_gdal_call_is_not_held_until_it_returns(tmp_path)
     assert cog._waiting(lambda a, b=1: a + b, 2, b=3) == 5
     with pytest.raises(ZeroDivisionError):
         cog._waiting(lambda: 1 / 0)
+
+
+@pytest.mark.parametrize("step", [1, 2], ids=["while-redirecting", "while-restoring"])
+def test_signal_while_descriptor_2_is_swapped(step, monkeypatch):
+    """A SIGINT that arrives between the steps that swap descriptor 2 and ``sys.stderr`` is
+    raised once they are all done: descriptor 2 and ``sys.stderr`` are what they were, so the
+    CLI's one error line reaches the terminal (it was lost in a CI run, stderr empty)."""
+    import sciviz_gbuf._atomic as atomic
+
+    before = os.fstat(2)
+    stderr_before = sys.stderr
+    calls = []
+    flush = atomic._flush_stderr
+
+    def flush_then_signal() -> None:
+        flush()
+        calls.append(1)
+        if len(calls) == step:
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.01)  # the handler would run here, between two bytecodes
+
+    monkeypatch.setattr(atomic, "_flush_stderr", flush_then_signal)
+    box: list[str] = []
+    with pytest.raises(Interrupted) as info:
+        with raising_signals():
+            with native_stderr() as captured:
+                box = captured
+                os.write(2, b"captured text\n")
+                time.sleep(0.01)
+    after = os.fstat(2)
+    assert info.value.signum == signal.SIGINT
+    assert (after.st_dev, after.st_ino) == (before.st_dev, before.st_ino)
+    assert sys.stderr is stderr_before
+    # interrupted as the capture began: the block did not run; else its text was kept
+    assert box == ([] if step == 1 else ["captured text\n"])
+    assert not atomic._DEFER["depth"] and not atomic._DEFER["pending"]
