@@ -25,6 +25,7 @@ from .operators import (
     suppress_zeroth_order,
 )
 from .reflection import highlight_lines, isophotes, reflection_angle, reflection_lines
+from .relief import local_relief, texture_shade
 from .shading import lambert
 from .terrain_light import cast_shadows, openness, sky_view
 
@@ -52,6 +53,7 @@ __all__ = [
     "internal_edges",
     "isophotes",
     "lambert",
+    "local_relief",
     "modulated_hatching",
     "normalize_gradient",
     "openness",
@@ -64,4 +66,5 @@ __all__ = [
     "sky_view",
     "sobel_gradient",
     "suppress_zeroth_order",
+    "texture_shade",
 ]

@@ -29,6 +29,7 @@ from .operators import (
     sobel_gradient,
 )
 from .reflection import isophotes, reflection_angle, reflection_lines
+from .relief import local_relief, texture_shade
 from .shading import lambert
 from .terrain_light import cast_shadows, openness, sky_view
 
@@ -90,6 +91,8 @@ FILTERS: dict[str, Filter] = _entries(
     Filter(color_bands, "array", needs_levels=True),
     Filter(sky_view, "array"),
     Filter(openness, "array"),
+    Filter(texture_shade, "array"),
+    Filter(local_relief, "array"),
     Filter(cast_shadows, "array"),
     # edges and surface analysis of a whole G-buffer
     Filter(profile_edges, "gbuffer"),

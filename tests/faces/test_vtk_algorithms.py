@@ -138,6 +138,8 @@ def _ref_array_filters(g: sg.GBuffer) -> dict[str, tuple[dict, dict, np.ndarray]
         ),
         "sky_view": (zsetup, {"directions": 8}, F.sky_view(z, directions=8, mask=m)),
         "openness": (zsetup, {"directions": 8}, F.openness(z, directions=8, mask=m)),
+        "texture_shade": (zsetup, {"detail": 0.8}, F.texture_shade(z, detail=0.8, mask=m)),
+        "local_relief": (zsetup, {"radius": 3.0}, F.local_relief(z, radius=3.0, mask=m)),
         "cast_shadows": (zsetup, {"azimuth": 200.0}, F.cast_shadows(z, azimuth=200.0, mask=m)),
         "contour_lines": ({}, {"interval": 0.3}, F.contour_lines(g.depth, interval=0.3, mask=m)),
         "hatching": (

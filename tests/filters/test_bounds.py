@@ -249,6 +249,9 @@ BEYOND = [
     ("sky_view", {"radius": 1e6}, "radius"),
     ("openness", {"directions": LIMITS["directions"] + 1}, "directions"),
     ("openness", {"radius": 1e6}, "radius"),
+    ("texture_shade", {"reach": LIMITS["reach"] + 1}, "reach"),
+    ("texture_shade", {"detail": 2.5}, "detail"),
+    ("local_relief", {"radius": 1e9}, "radius"),
     ("reflection_lines", {"stripes": 1e9}, "stripes"),
     ("reflection_lines", {"width": 1e4}, "width"),
     ("isophotes", {"width": 1e4}, "width"),
@@ -271,6 +274,8 @@ AT_BOUND = [
     ("hatching", {"spacing": LIMITS["spacing"] * LIMITS["supersample"]}),
     ("sky_view", {"directions": int(LIMITS["directions"]), "radius": LIMITS["reach"]}),
     ("openness", {"directions": int(LIMITS["directions"]), "radius": LIMITS["reach"]}),
+    ("texture_shade", {"reach": int(LIMITS["reach"]), "detail": 2.0}),
+    ("local_relief", {"radius": LIMITS["reach"]}),
     ("reflection_lines", {"stripes": LIMITS["levels"], "width": LINE_WIDTH}),
     ("isophotes", {"width": LINE_WIDTH}),
 ]
