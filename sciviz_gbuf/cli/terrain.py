@@ -18,7 +18,7 @@ from ..readers import read_dem
 from ..recipes.birdseye import birdseye_gbuffer, birdseye_panels, sumi_e
 from ..recipes.labels import contour_labels, labels_to_geojson
 from ..recipes.layout import PAGES, write_map_page
-from ..recipes.terrain import topographic_map
+from ..recipes.terrain import RELIEFS, topographic_map
 from ..writers.cog import (
     check_chunk_memory,
     check_worker_memory,
@@ -205,7 +205,7 @@ def _topo_options(args: argparse.Namespace, show: bool) -> dict:
         "bands": args.bands,
         "cmap": args.cmap,
         "sea_level": args.sea_level,
-        "relief": not args.no_relief,
+        "relief": False if args.no_relief else args.relief,
         "azimuth": args.azimuth,
         "altitude": args.altitude,
         "z_factor": args.z_factor,
@@ -603,7 +603,16 @@ def add_topo(sub) -> None:
         choices=["regular", "combined", "multidirectional", "igor"],
         help="hillshade variant (GDAL's)",
     )
-    p.add_argument("--no-relief", action="store_true", help="no relief shading")
+    shade = p.add_mutually_exclusive_group()
+    shade.add_argument(
+        "--relief",
+        default="hillshade",
+        choices=[name.replace("_", "-") for name in RELIEFS],
+        help="relief style: hillshade (GDAL's, the default); vat (RVT's blend of hillshade, "
+        "slope, openness and sky view); openness; texture (Brown's texture shading); "
+        "local-relief (the simple local relief model)",
+    )
+    shade.add_argument("--no-relief", action="store_true", help="no relief shading")
     p.add_argument("--shadows", action="store_true", help="darken cast shadows")
     p.add_argument(
         "--sky-view", action="store_true", help="darken cells that see less sky (slow: ~1 MPix/s)"

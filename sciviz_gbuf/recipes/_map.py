@@ -16,14 +16,13 @@ from ..filters import (
     cast_shadows,
     composite_map,
     contour_lines,
-    fill_nodata_ring,
-    hillshade,
 )
 from ..filters import sky_view as sky_view_factor
 from ..filters.bands import band_tables
 from ..filters.contours import MIN_RING_WIDTHS, contour_halo
 from ..readers import DEM, read_dem
 from ._intervals import contour_intervals, median_ground_slope, slope_lattice
+from ._relief import relief_flat, relief_shade, relief_style
 
 __all__ = [
     "CONTOUR_COLOR",
@@ -34,7 +33,6 @@ __all__ = [
     "check_line_sizes",
     "check_z_factor",
     "composite",
-    "flat_shade",
     "lazy_dem",
     "lit",
     "map_band_heights",
@@ -101,11 +99,6 @@ def lit(rgb: np.ndarray, light: np.ndarray) -> np.ndarray:
     it lifts the colour up to halfway towards white. NaN light leaves the colour as it is."""
     lt = np.nan_to_num(light, nan=1.0)[..., None]
     return rgb * np.minimum(lt, 1.0) + (1.0 - rgb) * (0.5 * np.clip(lt - 1.0, 0.0, 1.0))
-
-
-def flat_shade(**opts) -> float:
-    """The hillshade of flat ground for these options (``sin(altitude)`` for most variants)."""
-    return float(hillshade(np.zeros((3, 3), np.float32), **opts)[1, 1])
 
 
 def check_line_sizes(
@@ -186,6 +179,8 @@ def map_layers(
     median ground slope on the cells ``dx`` by ``dy`` of :func:`~._intervals.slope_lattice`).
     Every option is checked before the work starts."""
     z = heights
+    style = relief_style(relief)
+    relief = style is not None
     lo, hi, interval, major_interval = contour_intervals(z, interval, major_interval)
     layers: dict[str, object] = {"ink": None, "relief": relief}
     layers["tables"] = map_band_tables(
@@ -217,8 +212,8 @@ def map_layers(
             z_factor = relief_z_factor(None, slope)
         layers["z_factor"] = z_factor
         opts = {"azimuth": azimuth, "altitude": altitude, "z_factor": z_factor, "variant": variant}
-        layers["sh"] = hillshade(fill_nodata_ring(z), dx=dx, dy=dy, **opts)
-        layers["flat"] = max(flat_shade(dx=dx, dy=dy, **opts), 1e-3)
+        layers["sh"] = relief_shade(z, style, dx=dx, dy=dy, **opts)
+        layers["flat"] = relief_flat(style, dx=dx, dy=dy, **opts)
         if shadows:
             layers["lit"] = cast_shadows(
                 z, dx=dx, dy=dy, azimuth=azimuth, altitude=altitude, z_factor=z_factor

@@ -31,12 +31,14 @@ from ._map import (
     map_layers,
     map_min_ring,
 )
+from ._relief import RELIEFS, relief_style
 from ._resample import check_size_options, map_grid, resample_heights
 from .labels import check_in_memory, draw_labels, label_boxes, label_options, labels_of_grid
 from .terrain_chunked import lazy_topographic_map
 
 __all__ = [
     "CONTOUR_COLOR",
+    "RELIEFS",
     "as_dem",
     "composite",
     "contour_intervals",
@@ -121,9 +123,17 @@ def topographic_map(
     vmin, vmax : float, optional
         Heights at the ends of the colour map (default the data range): fix them to colour
         several tiles alike.
-    relief : bool, default: True
+    relief : bool or str, default: True
         Multiply the colours by a relief shade, normalised to 1 on open flat ground; slopes
-        facing the sun are lifted towards white.
+        facing the sun are lifted towards white. True is ``'hillshade'`` (GDAL's); the other
+        styles blend more layers into it as RVT's blender does (``RELIEFS``):
+        ``'vat'`` RVT's VAT (hillshade; slope 0-50 deg, inverted, luminosity 50 %; positive
+        openness 68-93 deg, overlay 50 %; sky-view factor 0.7-1, multiply 25 %; openness and
+        sky view over 16 directions of 10 cells), ``'openness'`` positive openness 68-93 deg
+        (normal, 50 %), ``'texture'`` Brown's texture shading (alpha 0.5) and
+        ``'local_relief'`` the simple local relief model (20 cells), each scaled to mid grey
+        +- its 99th percentile (normal, 50 %). Texture and local relief take their contrast
+        from the whole map: not for a DEM read in chunks.
     azimuth, altitude, variant
         Of the relief, as in :func:`~sciviz_gbuf.filters.hillshade` (GDAL's conventions).
     z_factor : float, optional
@@ -196,6 +206,7 @@ def topographic_map(
     check_size_options(size, scale, dpi)
     z_factor = check_z_factor(z_factor)
     labels = _validate.boolean(labels, "labels")
+    relief_style(relief)
     font_px, spacing_px = label_options(label_size, label_spacing, dpi if scale else None)
     text_colour = colour if label_color is None else _validate.rgb(label_color, "label_color")
     d = as_dem(dem)

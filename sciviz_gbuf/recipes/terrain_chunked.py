@@ -20,7 +20,7 @@ import numpy as np
 
 from .. import _dask as _chunks
 from ..errors import InputError
-from ..filters import fill_nodata_ring, hillshade
+from ..filters import hillshade
 from ..filters import sky_view as sky_view_factor
 from ..filters.hillshade import FILL_RING_RADIUS
 from ..filters.hillshade import RADIUS as HILLSHADE_RADIUS
@@ -29,13 +29,13 @@ from ..readers import DEM
 from ._intervals import choose_intervals, median_ground_slope, median_slope, slope_lattice
 from ._map import (
     composite,
-    flat_shade,
     map_band_heights,
     map_band_tables,
     map_contour_halo,
     map_contours,
     relief_z_factor,
 )
+from ._relief import relief_flat, relief_reach, relief_shade, relief_style
 
 __all__ = ["RELIEF_HALO", "lazy_topographic_map"]
 
@@ -73,8 +73,8 @@ def _statistics(
     return lo, hi, interval, major_interval, ground_slope
 
 
-def _relief_block(heights: np.ndarray, **opts) -> np.ndarray:
-    return hillshade(fill_nodata_ring(heights), **opts)
+def _relief_block(heights: np.ndarray, *, style: str = "hillshade", **opts) -> np.ndarray:
+    return relief_shade(heights, style, **opts)
 
 
 def lazy_topographic_map(
@@ -114,6 +114,11 @@ def lazy_topographic_map(
         )
     z = d.heights
     dx, dy = d.pixel_size
+    style = relief_style(relief)
+    relief = style is not None
+    # the stencil radius of the relief style (texture shading and local relief take their
+    # contrast from the whole grid and are refused here)
+    relief_halo = RELIEF_HALO + (relief_reach(style, dx, dy) if relief else 0)
     auto_z = relief and z_factor is None
     lo, hi, interval, major_interval, ground_slope = _statistics(
         z, interval, major_interval, vmin, vmax, d.source or "heights",
@@ -129,7 +134,8 @@ def lazy_topographic_map(
     light = {"azimuth": azimuth, "altitude": altitude, "z_factor": z_factor, "variant": variant}
     if relief:
         hillshade(np.zeros((3, 3), np.float32), dx=dx, dy=dy, **light)  # checks now
-        flat = max(flat_shade(dx=dx, dy=dy, **light), 1e-3)
+        flat = relief_flat(style, dx=dx, dy=dy, **light)
+        light["style"] = style
     # generalised maps colour their bands by the heights their lines are drawn from
     band_options = None
     if generalize and tables is not None:
@@ -146,7 +152,7 @@ def lazy_topographic_map(
         }
         return _windowed_map(
             z, colour, tables, ink_options if contours else None, light if relief else None,
-            sky_view and relief, dx, dy, flat, band_options,
+            sky_view and relief, dx, dy, flat, band_options, relief_halo,
         )  # fmt: skip
     layers: dict[str, object] = {}
     if band_options is not None:
@@ -167,7 +173,7 @@ def lazy_topographic_map(
         layers["sh"] = _chunks.map_stencil(
             _relief_block,
             {"heights": z},
-            halo=RELIEF_HALO,
+            halo=relief_halo,
             dx=dx,
             dy=dy,
             **light,
@@ -216,6 +222,7 @@ def _windowed_map(
     dy: float,
     flat: float,
     band_options: dict | None = None,
+    relief_halo: int = RELIEF_HALO,
 ):
     """The map of heights that can be read by window (:func:`~sciviz_gbuf._dask.map_windows`):
     one task per chunk reads the chunk with the widest halo any layer needs and computes every
@@ -228,7 +235,7 @@ def _windowed_map(
         # the contour stencil, plus with generalisation its smoothing and ring size
         halo = map_contour_halo(**ink_options)  # checks the options now
     if light is not None:
-        halo = max(halo, RELIEF_HALO)
+        halo = max(halo, relief_halo)
         if sky_view:
             halo = max(halo, sky_view_reach(default_sky_radius(dx, dy), dx, dy))
     if band_options is not None:
@@ -246,9 +253,8 @@ def _windowed_map(
         if light is not None:
             lay["sh"] = _relief_block(window, dx=dx, dy=dy, **light)[inner]
             if sky_view:
-                lay["sky"] = sky_view_factor(window, dx=dx, dy=dy, z_factor=light["z_factor"])[
-                    inner
-                ]
+                zf = light["z_factor"]
+                lay["sky"] = sky_view_factor(window, dx=dx, dy=dy, z_factor=zf)[inner]
         if band_options is not None:
             band_z = _band_z(window, band_options)
             if band_z is not None:

@@ -176,6 +176,8 @@ MAPS = [
     ("hugo_site.asc", ODD, {"interval": 2.0}),
     ("hugo_site.asc", ODD, {"variant": "multidirectional", "bands": "continuous", "width": 2.5}),
     ("pre_runout_DEM.asc", ODD, {"sky_view": True}),
+    ("pre_runout_DEM.asc", (29, 41), {"relief": "vat"}),
+    ("hugo_site.asc", ODD, {"relief": "openness", "bands": False}),
     ("pre_runout_DEM.asc", ODD, {"interval": 5.0, "major_interval": 25.0, "sea_level": 300.0}),
     ("SRTMGL3_40.09_-105.55_40.21_-105.35.asc", (13, 7), {}),
     ("SRTMGL3_40.09_-105.55_40.21_-105.35.asc", (31, 17), {"bands": [2000.0, 2500.0, 3000.0]}),
@@ -394,3 +396,10 @@ def test_local_cluster_to_cog_equals_the_in_memory_map(tmp_path):
         assert src.transform.to_gdal() == pytest.approx(dem.transform)
         pixels = np.moveaxis(src.read(), 0, 2)
     assert _same(pixels, ref)
+
+
+@pytest.mark.parametrize("style", ["texture", "local_relief"])
+def test_whole_grid_relief_styles_are_refused_chunk_by_chunk(style):
+    d = _dem("hugo_site.asc")
+    with pytest.raises(InputError, match="whole map"):
+        topographic_map(_lazy(d, ODD), relief=style)
