@@ -34,7 +34,14 @@ from . import _contour_generalize as _gen
 from . import _contour_kernels as _p
 from . import _stencil_kernels as _stencil
 
-__all__ = ["band_heights", "contour_halo", "contour_lines", "hatching", "modulated_hatching"]
+__all__ = [
+    "band_heights",
+    "contour_halo",
+    "contour_lines",
+    "generalized_field",
+    "hatching",
+    "modulated_hatching",
+]
 
 # f1 per profile: the width W of its ramp (px) and P(v) = v (p1 + v (p2 + v p3)) along it: a
 # step; a linear ramp one pixel wide, the exact area coverage of a pixel by a straight line;
@@ -250,6 +257,26 @@ def contour_lines(
     s, g = _gen.smooth_field(s, valid, float(prm[_p.GAP]))
     ink = _run(code, s, m, g, prm)
     return _gen.drop_small_rings(ink, ring, valid, ring / MIN_RING_WIDTHS)
+
+
+def generalized_field(
+    field: np.ndarray, *, interval: float, mask: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """The smoothed field whose level lines ``contour_lines(field, interval=interval,
+    generalize=True)`` draws, and its gradient magnitude (field units per pixel, of the local
+    fit at least 1 px wide, as the lines' widths and crowding use it): for vector lines that
+    are the drawn ones (:func:`~sciviz_gbuf.filters.contour_polylines` of the first).
+
+    Returns
+    -------
+    (smoothed, gradient) : two (H, W) float32 arrays, NaN where masked or not finite.
+    """
+    s, m, _ = _prepare(field, mask, None)
+    q = _validate.positive(interval, "interval")
+    valid = np.isfinite(s) if m is None else np.isfinite(s) & m
+    smooth, grad = _gen.smooth_field(s, valid, float(q))
+    smooth = np.where(valid, smooth, np.float32(np.nan)).astype(np.float32)
+    return smooth, np.where(valid, grad, np.float32(np.nan)).astype(np.float32)
 
 
 def _ring(generalize, min_ring, gradient, prm: np.ndarray) -> float | None:

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -21,14 +22,17 @@ import numpy as np
 from .. import _validate
 from .._atomic import atomic_output
 from ..errors import InputError
+from ..filters import contour_polylines
+from ..filters.contours import MIN_RING_WIDTHS, generalized_field
 from ..readers import DEM
 from ._intervals import contour_intervals
-from ._map import as_dem
+from ._map import CONTOUR_COLOR, as_dem
 from ._resample import map_grid
 from .furniture import legend_classes, scale_bar
+from .labels import PAD_FONTS, ContourLabel, label_boxes, label_options, labels_of_grid
 from .terrain import topographic_map
 
-__all__ = ["PAGES", "map_page", "page_scale", "write_map_page"]
+__all__ = ["PAGES", "map_lines", "map_page", "page_scale", "write_map_page"]
 
 #: Page sizes, (width, height) in millimetres, portrait.
 PAGES = {"A4": (210.0, 297.0), "A3": (297.0, 420.0), "letter": (215.9, 279.4)}
@@ -112,6 +116,158 @@ def _north_note(d: DEM) -> tuple[float, str]:
     return gamma, f"Grid north; true north {abs(gamma):.1f}\u00b0 {side}"
 
 
+#: Vertex spacing of vector contour lines along their length, in map pixels (the knock-out
+#: of a label and the crowding of minors are decided per vertex).
+_VERTEX_PX = 0.5
+
+
+def _densify(points: np.ndarray, step: float) -> np.ndarray:
+    """``points`` (N, 2) resampled along their length at most ``step`` apart (the original
+    vertices kept)."""
+    seg = np.hypot(*np.diff(points, axis=0).T)
+    n = np.maximum(np.ceil(seg / step).astype(int), 1)
+    t = np.concatenate([np.arange(k) / k for k in n] + [np.zeros(1)])
+    start = np.repeat(np.arange(len(seg)), n)
+    start = np.append(start, len(seg) - 1)
+    t[-1] = 1.0
+    a, b = points[start], points[start + 1]
+    return a + (b - a) * t[:, None]
+
+
+def _runs(keep: np.ndarray) -> list[tuple[int, int]]:
+    """``(start, stop)`` of the runs of True in ``keep`` with at least two entries."""
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], keep.astype(np.int8), [0]])))
+    return [(a, b) for a, b in zip(edges[::2], edges[1::2], strict=True) if b - a >= 2]
+
+
+#: Along-line window (vertices) over which a minor's spacing is averaged, and the shortest
+#: piece of a minor kept or cut by crowding (vertices): 8 px and 6 px at 0.5 px a vertex.
+_CROWD_WINDOW = 17
+_CROWD_PIECE = 12
+
+
+def _uncrowded(spacing: np.ndarray, crowd: float) -> np.ndarray:
+    """Which vertices of a minor line stay: where its spacing to the next line, averaged
+    over 8 px along it, is at least ``crowd``; pieces and gaps shorter than 6 px go to their
+    surroundings (a hard threshold on a noisy spacing would draw dashes where the ink fades)."""
+    n = len(spacing)
+    k = min(_CROWD_WINDOW, n)
+    finite = np.where(np.isfinite(spacing), spacing, 1e30)
+    smooth = np.convolve(np.pad(finite, k // 2, mode="edge"), np.ones(k) / k, mode="valid")[:n]
+    keep = smooth >= crowd
+    for value in (True, False):  # short kept pieces go, then short gaps close
+        edges = np.flatnonzero(np.diff(np.concatenate([[0], (keep == value).astype(np.int8), [0]])))
+        for a, b in zip(edges[::2], edges[1::2], strict=True):
+            if b - a < _CROWD_PIECE and (a > 0 or b < n):
+                keep[a:b] = not value
+    return keep
+
+
+def _sample(grid: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    """Nearest-cell values of ``grid`` at the (x, y) pixel positions ``pts``."""
+    h, w = grid.shape
+    c = np.clip(np.rint(pts[:, 0]).astype(int), 0, w - 1)
+    r = np.clip(np.rint(pts[:, 1]).astype(int), 0, h - 1)
+    return grid[r, c]
+
+
+def map_lines(
+    grid: DEM,
+    *,
+    interval: float | None = None,
+    major_interval: float | None = None,
+    width: float = 1.0,
+    major_width: float = 2.0,
+    dense_spacing: float = 4.0,
+    generalize: bool = True,
+    labels: Sequence[ContourLabel] = (),
+) -> list[tuple[np.ndarray, bool]]:
+    """The contour lines of a map on the map's own grid as vector polylines: the lines
+    :func:`~sciviz_gbuf.recipes.terrain.topographic_map` draws as ink, for a PDF.
+
+    The levels are the map's (default intervals alike); with ``generalize`` the lines are
+    traced on the smoothed field of the generalised ink
+    (:func:`~sciviz_gbuf.filters.contours.generalized_field`) and rings that fit in 3 widths
+    of the widest line are left out, as there. Minor lines are cut where they crowd closer
+    than ``dense_spacing - width / 2`` px (the middle of the ink's fade, Eq. 15; majors never
+    thin out), and every line is cut under the boxes of ``labels``.
+
+    Returns
+    -------
+    list of ((N, 2) float64 points, major)
+        ``(x, y)`` in map pixels (column, row; pixel centres at integers, row 0 north).
+    """
+    heights = np.where(grid.mask, grid.heights, np.nan).astype(np.float32)
+    _lo, _hi, minor, major = contour_intervals(heights, interval, major_interval)
+    if generalize:
+        field, grad = generalized_field(heights, interval=minor)
+    else:
+        field = heights
+        gy, gx = np.gradient(heights.astype(np.float64))
+        grad = np.hypot(gx, gy).astype(np.float32)
+    lines = contour_polylines(field, interval=minor, major_interval=major)
+    widest = max(width, major_width) if major is not None else width
+    ring = MIN_RING_WIDTHS * widest if generalize else 0.0
+    cover = label_boxes(labels, heights.shape) if labels else None
+    crowd = dense_spacing - width / 2
+    out: list[tuple[np.ndarray, bool]] = []
+    for line in lines:
+        pts = line.points
+        if len(pts) < 2:
+            continue
+        if line.closed and float((pts.max(axis=0) - pts.min(axis=0)).max()) <= ring:
+            continue
+        pts = _densify(pts, _VERTEX_PX)
+        keep = np.ones(len(pts), bool)
+        if not line.major:
+            keep = _uncrowded(minor / np.maximum(_sample(grad, pts), 1e-30), crowd)
+        if cover is not None:
+            keep &= _sample(cover, pts) <= 0.0
+        # a stub left between a label's box and a crowded stretch or another box goes
+        pieces = [(a, b) for a, b in _runs(keep) if b - a >= _CROWD_PIECE or b - a == len(pts)]
+        out.extend((pts[a:b], bool(line.major)) for a, b in pieces)
+    return out
+
+
+def _draw_vectors(fig, lines, labels, *, origin, dpi, map_options, font_px) -> None:
+    """The contour lines and label text of a map as vector artists over its image, whose
+    upper-left page pixel is ``origin`` (x from the left, y from the bottom of the page)."""
+    from matplotlib.collections import LineCollection
+
+    x0, top = origin
+    inch = 1.0 / dpi
+
+    def page(xy: np.ndarray) -> np.ndarray:
+        # pixel centre (c, r) at page pixel (x0 + c + 0.5, top - r - 0.5), in inches
+        return np.column_stack([(x0 + xy[:, 0] + 0.5) * inch, (top - xy[:, 1] - 0.5) * inch])
+
+    colour = _validate.rgb(map_options.get("contour_color", CONTOUR_COLOR), "contour_color")
+    pt = 72.0 / dpi  # points per map pixel
+    widths = {False: float(map_options.get("width", 1.0)) * pt,
+              True: float(map_options.get("major_width", 2.0)) * pt}  # fmt: skip
+    for major in (False, True):
+        segs = [page(p) for p, m in lines if m == major]
+        if segs:
+            fig.add_artist(LineCollection(
+                segs, transform=fig.dpi_scale_trans, colors=[tuple(colour)],
+                linewidths=widths[major], capstyle="butt", joinstyle="round", zorder=2,
+            ))  # fmt: skip
+    text_colour = map_options.get("label_color")
+    text_colour = colour if text_colour is None else _validate.rgb(text_colour, "label_color")
+    for lab in labels:
+        ((x, y),) = page(np.array([[lab.x, lab.y]]))
+        # the label's (x, y) is the centre of its ink; numerals stand on the baseline, which
+        # lies half the ink's height (the box's less its margins) below it, at the text's foot
+        a = math.radians(lab.angle)
+        ink = lab.height - 2 * PAD_FONTS * font_px
+        x += 0.5 * ink * inch * math.sin(a)
+        y -= 0.5 * ink * inch * math.cos(a)
+        fig.text(x, y, lab.text, transform=fig.dpi_scale_trans, rotation=lab.angle,
+                 rotation_mode="anchor", ha="center", va="baseline",
+                 fontsize=font_px * pt, family="DejaVu Sans", color=tuple(text_colour),
+                 zorder=2)  # fmt: skip
+
+
 def map_page(
     dem: DEM | str | os.PathLike | np.ndarray,
     *,
@@ -123,6 +279,7 @@ def map_page(
     credit: str | None = None,
     labels: bool = True,
     legend: bool = True,
+    vector: bool = False,
     **map_options,
 ):
     """A matplotlib Figure of a print layout: the map at a round scale inside a frame, the
@@ -142,6 +299,11 @@ def map_page(
     title, credit : str, optional
     labels, legend : bool
         Contour labels (7 pt) and the hypsometric legend.
+    vector : bool, default: False
+        Contour lines and label text as vector artists over the map's image (which is then
+        drawn without them): sharp at any zoom in a PDF, text selectable. The lines are
+        :func:`map_lines`, the labels placed as in the raster map. ``write_map_page`` turns it
+        on for a PDF.
     **map_options
         Of :func:`~sciviz_gbuf.recipes.terrain.topographic_map` (intervals, bands, cmap,
         relief, ...), but not ``size``/``scale``/``dpi``.
@@ -159,6 +321,7 @@ def map_page(
     landscape = _validate.boolean(landscape, "landscape")
     labels = _validate.boolean(labels, "labels")
     legend = _validate.boolean(legend, "legend")
+    vector = _validate.boolean(vector, "vector")
     dpi = _validate.size(dpi, "dpi", "dpi")
     for key in ("size", "scale", "dpi", "progress_bar"):
         if key in map_options:
@@ -185,8 +348,25 @@ def map_page(
         )
     scale_text = f"1:{n}"
     opts = {"scale": scale_text, "dpi": dpi}
-    img = topographic_map(d, labels=labels, **opts, **map_options)
     grid = map_grid(d, **opts)
+    lines: list[tuple[np.ndarray, bool]] = []
+    placed: list[ContourLabel] = []
+    font_px = 0.0
+    if vector:
+        rest = {k: v for k, v in map_options.items() if k != "contours"}
+        img = topographic_map(d, labels=False, contours=False, **opts, **rest)
+        if map_options.get("contours", True):
+            font_px, spacing_px = label_options(
+                map_options.get("label_size"), map_options.get("label_spacing"), dpi
+            )
+            iv, mv = map_options.get("interval"), map_options.get("major_interval")
+            if labels:
+                placed = labels_of_grid(grid, iv, mv, font_px, spacing_px)
+            keys = ("width", "major_width", "dense_spacing", "generalize")
+            lines = map_lines(grid, interval=iv, major_interval=mv, labels=placed,
+                              **{k: map_options[k] for k in keys if k in map_options})  # fmt: skip
+    else:
+        img = topographic_map(d, labels=labels, **opts, **map_options)
     ih, iw = img.shape[:2]
     fig = Figure(figsize=(pw / 25.4, ph / 25.4), dpi=dpi)
     fig.patch.set_facecolor("white")
@@ -197,6 +377,9 @@ def map_page(
     frame_y0 = MARGIN_MM + STRIP_MM + fh - ih / px
     x0, y0 = round(frame_x0 * px), round(frame_y0 * px)
     fig.figimage(img, xo=x0, yo=y0, origin="upper", resize=False, zorder=1)
+    if vector:
+        _draw_vectors(fig, lines, placed, origin=(x0, y0 + ih), dpi=dpi,
+                      map_options=map_options, font_px=font_px)  # fmt: skip
     fx, fy = x0 / px / pw, y0 / px / ph  # figure fractions of the map's corner
     fwid, fhgt = iw / px / pw, ih / px / ph
     fig.add_artist(Rectangle((fx, fy), fwid, fhgt, transform=fig.transFigure, fill=False,
@@ -267,14 +450,19 @@ def map_page(
 
 def write_map_page(path: str | os.PathLike, dem, **options) -> tuple[int, int]:
     """Write :func:`map_page` as PNG or PDF (by the suffix), all or nothing; returns the page
-    size in pixels at its dpi."""
+    size in pixels at its dpi. A PDF has vector contour lines and label text by default
+    (``vector=True``), a PNG the map's own ink."""
     suffix = Path(path).suffix.lower()
     if suffix not in (".png", ".pdf"):
         raise InputError(f"output: expected a .png or .pdf file for a page, got {str(path)!r}")
+    import matplotlib
+
+    options.setdefault("vector", suffix == ".pdf")
     fig = map_page(dem, **options)
     dpi = fig.dpi
     with atomic_output(path) as part:
-        with open(part.path, "wb") as f:
+        # TrueType fonts embedded (type 42): the PDF's text stays text (searchable, sharp)
+        with open(part.path, "wb") as f, matplotlib.rc_context({"pdf.fonttype": 42}):
             meta = {"Creator": "sciviz-gbuf"} if suffix == ".pdf" else None
             fig.savefig(f, format=suffix[1:], dpi=dpi, facecolor="white", metadata=meta)
     w, h = fig.get_size_inches() * dpi
