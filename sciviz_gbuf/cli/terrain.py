@@ -233,8 +233,12 @@ def _topo_paths(args: argparse.Namespace) -> tuple[Path, bool]:
     if args.page is not None:
         _check_page(args, out, lazy)
         return out, False
-    if args.landscape or args.title is not None or args.credit is not None:
-        raise InputError("--landscape/--title/--credit: these lay out a page: add --page A4")
+    if (args.landscape or args.title is not None or args.credit is not None
+            or args.graticule is not None or args.furniture != "outside"):  # fmt: skip
+        raise InputError(
+            "--landscape/--title/--credit/--graticule/--furniture: these lay out a page: add "
+            "--page A4"
+        )
     if suffix not in (".png", ".tif", ".tiff"):
         raise InputError(
             f"--output: expected a file name ending in .png or .tif, got {args.output!r}"
@@ -315,7 +319,7 @@ def _topo_page(args: argparse.Namespace, source, out: Path, show: bool, t0: floa
         w, h = write_map_page(
             out, dem, page=args.page, landscape=args.landscape, dpi=args.dpi or 300.0,
             scale=args.scale, title=args.title, credit=args.credit, labels=args.labels,
-            **opts,
+            graticule=args.graticule or False, furniture=args.furniture, **opts,
         )  # fmt: skip
     print(f"wrote {out} ({args.page}, {w}x{h} px) in {time.perf_counter() - t0:.1f} s")
     return 0
@@ -435,6 +439,13 @@ def _topo_out_of_core(args: argparse.Namespace, source, out: Path, show: bool, t
 
 def _cmd_birdseye(args: argparse.Namespace) -> int:
     out = png_output(args.output)
+    if args.labels and args.style not in ("mx4", "cn"):
+        raise InputError(
+            f"--labels: the heights are written into the contour lines of --style mx4 or cn, "
+            f"not {args.style}"
+        )
+    if args.labels and args.contours == "none":
+        raise InputError("--labels: --contours none draws no contour lines to label")
     t0 = time.perf_counter()
     show = show_progress(args)
     dem = _read_terrain(args.dem, args.geographic)
@@ -464,6 +475,7 @@ def _cmd_birdseye(args: argparse.Namespace) -> int:
             azimuth=args.azimuth,
             altitude=args.altitude,
             z_factor=args.z_factor,
+            **_label_options(args),
         )
         image = panels[args.style]
     write_png(out, image, dpi=args.dpi)
@@ -655,6 +667,19 @@ def add_topo(sub) -> None:
     p.add_argument("--title", default=None, help="with --page: the title above the map")
     p.add_argument("--credit", default=None, help="with --page: a credit line (data sources)")
     p.add_argument(
+        "--graticule",
+        choices=["ticks", "grid"],
+        default=None,
+        help="with --page: the CRS's coordinates on the frame (ticks), or ticks and grid lines",
+    )
+    p.add_argument(
+        "--furniture",
+        choices=["outside", "inside"],
+        default="outside",
+        help="with --page: legend, scale bar and north arrow below the map (default) or on a "
+        "panel inside its frame",
+    )
+    p.add_argument(
         "--chunks",
         type=_chunks_arg,
         default=None,
@@ -739,6 +764,26 @@ def add_birdseye(sub) -> None:
         choices=["mx4", "mx2", "cn", "pr", "sh", "sumi-e"],
         help="mx4: profiles + contours + relief + bands (default); mx2: profiles + relief; "
         "cn contours; pr profiles; sh relief; sumi-e an ink painting",
+    )
+    p.add_argument(
+        "--labels",
+        action="store_true",
+        help="with --style mx4 or cn: write the heights of the index contours into the lines "
+        "(along the line as seen, reading uphill, the line broken under the number)",
+    )
+    p.add_argument(
+        "--label-size",
+        type=number(lambda v: v > 0, "a font size in pixels > 0"),
+        default=None,
+        metavar="PX",
+        help="label font size in output pixels (default 11)",
+    )
+    p.add_argument(
+        "--label-spacing",
+        type=number(lambda v: v > 0, "a distance in pixels > 0"),
+        default=None,
+        metavar="PX",
+        help="least distance between labels along a line, pixels (default 25 font sizes)",
     )
     p.add_argument(
         "--save-gbuffer", default=None, metavar="FILE.npz", help="also save the G-buffers"

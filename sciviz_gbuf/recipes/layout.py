@@ -45,13 +45,24 @@ TITLE_MM = 12.0
 _MM = 0.001  # metres per millimetre
 
 
-def _frame_mm(page: str, landscape: bool, title: bool) -> tuple[float, float, float, float]:
-    """``(page_w, page_h, frame_w, frame_h)`` in mm."""
+#: Where the furniture goes: below the map frame, or on a panel inside its lower edge.
+FURNITURE = ("outside", "inside")
+#: Coordinate ticks on the frame, or ticks and grid lines across the map.
+GRATICULES = ("ticks", "grid")
+#: Height of the furniture panel inside the frame, mm.
+PANEL_MM = 27.0
+
+
+def _frame_mm(
+    page: str, landscape: bool, title: bool, inside: bool = False
+) -> tuple[float, float, float, float]:
+    """``(page_w, page_h, frame_w, frame_h)`` in mm (the frame takes the furniture's strip
+    too when the furniture is inside it)."""
     pw, ph = PAGES[page]
     if landscape:
         pw, ph = ph, pw
     fw = pw - 2 * MARGIN_MM
-    fh = ph - 2 * MARGIN_MM - STRIP_MM - (TITLE_MM if title else 0.0)
+    fh = ph - 2 * MARGIN_MM - (0.0 if inside else STRIP_MM) - (TITLE_MM if title else 0.0)
     return pw, ph, fw, fh
 
 
@@ -65,10 +76,17 @@ def _round_scale(n: float) -> int:
     return round(10.0 ** (e + 1))  # pragma: no cover - the loop always returns
 
 
-def page_scale(dem: DEM, page: str = "A4", *, landscape: bool = False, title: bool = False) -> int:
+def page_scale(
+    dem: DEM,
+    page: str = "A4",
+    *,
+    landscape: bool = False,
+    title: bool = False,
+    furniture: str = "outside",
+) -> int:
     """The map scale denominator N of :func:`map_page`: the smallest round 1:N at which the
     DEM's extent (its cells times their size in metres) fits the page's map frame."""
-    _, _, fw, fh = _frame_mm(page, landscape, title)
+    _, _, fw, fh = _frame_mm(page, landscape, title, furniture == "inside")
     h, w = dem.shape
     ground_w, ground_h = w * dem.pixel_size[0], h * dem.pixel_size[1]
     return _round_scale(max(ground_w / (fw * _MM), ground_h / (fh * _MM)))
@@ -268,6 +286,104 @@ def _draw_vectors(fig, lines, labels, *, origin, dpi, map_options, font_px) -> N
                  zorder=2)  # fmt: skip
 
 
+#: Graticule spacings of geographic grids, in arc seconds (1", 2", 5", ... 30 deg).
+_ARC_STEPS = (1, 2, 5, 10, 15, 30, 60, 120, 300, 600, 900, 1800, 3600, 7200, 18000, 36000,
+              54000, 108000)  # fmt: skip
+#: About this many graticule intervals across the map's wider side.
+_TICKS = 5
+
+
+def _tick_step(span: float, geographic: bool) -> float:
+    """A round spacing giving about :data:`_TICKS` intervals over ``span`` (CRS units):
+    1, 2 or 5 times a power of ten (metres), or a round angle (degrees)."""
+    raw = span / _TICKS
+    if geographic:
+        arcsec = raw * 3600.0
+        return min(_ARC_STEPS, key=lambda a: abs(math.log(a / arcsec))) / 3600.0
+    e = math.floor(math.log10(raw))
+    return min((m * 10.0**e for m in (1, 2, 5, 10)), key=lambda v: abs(math.log(v / raw)))
+
+
+def tick_text(value: float, step: float, geographic: bool, axis: str) -> str:
+    """A graticule value as printed on a map edge: metres with thin-space thousands
+    (``485 000``), or degrees, minutes and seconds with the hemisphere (``105°25′W``), only
+    as fine as the spacing ``step``; ``axis`` is ``'x'`` (east) or ``'y'`` (north)."""
+    if not geographic:
+        return f"{value:,.0f}".replace(",", "\u2009").replace("-", "\u2212")
+    hemi = ("E", "W") if axis == "x" else ("N", "S")
+    letter = hemi[0] if value >= 0 else hemi[1]
+    total = round(abs(value) * 3600.0)
+    deg, rest = divmod(total, 3600)
+    minutes, seconds = divmod(rest, 60)
+    step_s = round(step * 3600.0)
+    text = f"{deg}\u00b0"
+    if step_s % 3600 or minutes or seconds:
+        text += f"{minutes:02d}\u2032" if deg or step_s < 3600 else f"{minutes}\u2032"
+    if step_s % 60 or seconds:
+        text += f"{seconds:02d}\u2033"
+    return text + letter
+
+
+def _graticule(fig, grid: DEM, corner: tuple[int, int], size: tuple[int, int], *, dpi: float,
+               mode: str) -> None:  # fmt: skip
+    """Coordinate ticks (and with ``mode='grid'`` grid lines) of the map's CRS on its frame:
+    the map image's lower-left page pixel is ``corner``, its size ``(w, h)`` pixels."""
+    from matplotlib.collections import LineCollection
+
+    gx0, gdx, rx, gy0, ry, gdy = grid.transform
+    if rx or ry:
+        raise InputError("graticule: the grid is rotated (its transform has rotation terms)")
+    x0, y0 = corner
+    w, h = size
+    inch = 1.0 / dpi
+    mm = dpi / 25.4  # page pixels per mm
+    west, east = sorted((gx0, gx0 + w * gdx))
+    south, north = sorted((gy0, gy0 + h * gdy))
+    step = _tick_step(max(east - west, north - south), grid.geographic)
+    tick = 1.5 * mm
+    segs, lines, texts = [], [], []
+    for axis, lo, hi in (("x", west, east), ("y", south, north)):
+        first = math.ceil(lo / step - 1e-9)
+        for k in range(first, math.floor(hi / step + 1e-9) + 1):
+            v = k * step
+            if axis == "x":
+                c = x0 + (v - gx0) / gdx  # page pixel column of the value
+                if not x0 + 0.5 * mm <= c <= x0 + w - 0.5 * mm:
+                    continue
+                segs += [[(c, y0), (c, y0 - tick)], [(c, y0 + h), (c, y0 + h + tick)]]
+                lines.append([(c, y0), (c, y0 + h)])
+                texts.append((c, y0 - tick - 0.5 * mm, 0.0, "center", "top", v))
+                texts.append((c, y0 + h + tick + 0.5 * mm, 0.0, "center", "bottom", v))
+            else:
+                r = y0 + h - (v - gy0) / gdy  # page pixel row from the bottom
+                if not y0 + 0.5 * mm <= r <= y0 + h - 0.5 * mm:
+                    continue
+                segs += [[(x0, r), (x0 - tick, r)], [(x0 + w, r), (x0 + w + tick, r)]]
+                lines.append([(x0, r), (x0 + w, r)])
+                texts.append((x0 - tick - 0.5 * mm, r, 90.0, "right", "center", v))
+                texts.append((x0 + w + tick + 0.5 * mm, r, 90.0, "left", "center", v))
+    if not segs:
+        return
+
+    def inches(xy):
+        return np.asarray(xy, float) * inch
+
+    fig.add_artist(LineCollection([inches(sg) for sg in segs], transform=fig.dpi_scale_trans,
+                                  colors="black", linewidths=0.5, zorder=3,
+                                  gid="graticule-ticks"))  # fmt: skip
+    if mode == "grid":
+        fig.add_artist(LineCollection([inches(ln) for ln in lines],
+                                      transform=fig.dpi_scale_trans, colors=[(0, 0, 0, 0.45)],
+                                      linewidths=0.35, zorder=2, gid="graticule-grid"))  # fmt: skip
+    for x, y, rot, ha, va, v in texts:
+        axis = "x" if rot == 0.0 else "y"
+        fig.text(x * inch, y * inch, tick_text(v, step, grid.geographic, axis),
+                 transform=fig.dpi_scale_trans, rotation=rot, rotation_mode="anchor",
+                 ha=ha if rot == 0.0 else "center", va=va if rot == 0.0 else
+                 ("bottom" if ha == "right" else "top"), fontsize=5.5, zorder=3,
+                 gid="graticule")  # fmt: skip
+
+
 def map_page(
     dem: DEM | str | os.PathLike | np.ndarray,
     *,
@@ -280,6 +396,8 @@ def map_page(
     labels: bool = True,
     legend: bool = True,
     vector: bool = False,
+    graticule: str | bool = False,
+    furniture: str = "outside",
     **map_options,
 ):
     """A matplotlib Figure of a print layout: the map at a round scale inside a frame, the
@@ -304,6 +422,13 @@ def map_page(
         drawn without them): sharp at any zoom in a PDF, text selectable. The lines are
         :func:`map_lines`, the labels placed as in the raster map. ``write_map_page`` turns it
         on for a PDF.
+    graticule : {False, 'ticks', 'grid'}, default: False
+        Coordinates of the map's CRS on its frame: ticks with their values on all four
+        edges (metres, or degrees-minutes-seconds on geographic grids; about five round
+        intervals across), and with ``'grid'`` also thin grid lines across the map.
+    furniture : {'outside', 'inside'}, default: 'outside'
+        The legend, scale bar, north arrow and credit below the map frame, or on a white
+        panel inside its lower edge (the map then takes the whole frame: a larger scale fits).
     **map_options
         Of :func:`~sciviz_gbuf.recipes.terrain.topographic_map` (intervals, bands, cmap,
         relief, ...), but not ``size``/``scale``/``dpi``.
@@ -322,6 +447,10 @@ def map_page(
     labels = _validate.boolean(labels, "labels")
     legend = _validate.boolean(legend, "legend")
     vector = _validate.boolean(vector, "vector")
+    if graticule is not False:
+        graticule = _validate.choice(graticule, "graticule", GRATICULES)
+    furniture = _validate.choice(furniture, "furniture", FURNITURE)
+    inside = furniture == "inside"
     dpi = _validate.size(dpi, "dpi", "dpi")
     for key in ("size", "scale", "dpi", "progress_bar"):
         if key in map_options:
@@ -329,7 +458,7 @@ def map_page(
     for name, text in (("title", title), ("credit", credit)):
         if text is not None and (not isinstance(text, str) or len(text) > 500):
             raise InputError(f"{name}: expected a string of at most 500 characters")
-    pw, ph, fw, fh = _frame_mm(page, landscape, bool(title))
+    pw, ph, fw, fh = _frame_mm(page, landscape, bool(title), inside)
     side = max(pw, ph) / 25.4 * dpi
     if side > _validate.LIMITS["image_side"]:
         raise InputError(
@@ -337,7 +466,9 @@ def map_page(
             f"{int(_validate.LIMITS['image_side'])} (LIMITS['image_side'])"
         )
     d = as_dem(dem)
-    n = _parse_scale(scale) or page_scale(d, page, landscape=landscape, title=bool(title))
+    n = _parse_scale(scale) or page_scale(
+        d, page, landscape=landscape, title=bool(title), furniture=furniture
+    )
     h, w = d.shape
     map_w_mm = w * d.pixel_size[0] / n / _MM
     map_h_mm = h * d.pixel_size[1] / n / _MM
@@ -374,7 +505,7 @@ def map_page(
     # the map centred across its frame, at its top, at whole page pixels (placed as it is: no
     # resampling); the furniture follows right under it
     frame_x0 = MARGIN_MM + (fw - iw / px) / 2
-    frame_y0 = MARGIN_MM + STRIP_MM + fh - ih / px
+    frame_y0 = MARGIN_MM + (0.0 if inside else STRIP_MM) + fh - ih / px
     x0, y0 = round(frame_x0 * px), round(frame_y0 * px)
     fig.figimage(img, xo=x0, yo=y0, origin="upper", resize=False, zorder=1)
     if vector:
@@ -389,9 +520,19 @@ def map_page(
         return x_mm / pw, y_mm / ph
 
     if title:
-        fig.text(*at(pw / 2, ph - MARGIN_MM - TITLE_MM / 2), title, ha="center", va="center",
-                 fontsize=16, family="DejaVu Sans")  # fmt: skip
-    strip_top = y0 / px - 6.0
+        # clear of the coordinates on the frame's top edge when there are any
+        title_y = ph - MARGIN_MM - (TITLE_MM / 2 - (2.5 if graticule else 0.0))
+        fig.text(*at(pw / 2, title_y), title, ha="center", va="center", fontsize=16,
+                 family="DejaVu Sans")  # fmt: skip
+    if graticule:
+        _graticule(fig, grid, (x0, y0), (iw, ih), dpi=dpi, mode=graticule)
+    # the furniture: below the frame across the page, or on a panel inside the frame's foot
+    if inside:
+        left, right, strip_top, z = x0 / px + 3.0, (x0 + iw) / px - 3.0, y0 / px + PANEL_MM - 3.0, 4
+        fig.add_artist(Rectangle((fx, fy), fwid, PANEL_MM / ph, transform=fig.transFigure,
+                                 fc=(1, 1, 1, 0.85), ec="black", lw=0.5, zorder=3.5))  # fmt: skip
+    else:
+        left, right, strip_top, z = MARGIN_MM, pw - MARGIN_MM, y0 / px - 6.0, 3
     # legend: swatches left to right with their edges
     _lo, _hi, minor, major = contour_intervals(
         grid.heights, map_options.get("interval"), map_options.get("major_interval")
@@ -401,49 +542,73 @@ def map_page(
         classes = legend_classes(grid, **{k: map_options[k] for k in keys if k in map_options})
         if classes:
             n_cls = len(classes)
-            width = min(8.0, (pw * 0.55) / n_cls)
+            width = min(8.0, 0.55 * (right - left + 2 * MARGIN_MM) / n_cls)
             for i, c in enumerate(classes):
-                fig.add_artist(Rectangle(at(MARGIN_MM + i * width, strip_top - 8.0),
-                                         width / pw, 6.0 / ph, transform=fig.transFigure,
-                                         fc=np.array(c.rgb) / 255.0, ec="none"))  # fmt: skip
+                fig.add_artist(
+                    Rectangle(
+                        at(left + i * width, strip_top - 8.0),
+                        width / pw,
+                        6.0 / ph,
+                        transform=fig.transFigure,
+                        fc=np.array(c.rgb) / 255.0,
+                        ec="none",
+                        zorder=z,
+                    )
+                )
             # the inner edges are the band edges (the outer ones the data's range)
             step = max(1, math.ceil(n_cls / 8))
             for i in range(1, n_cls, step):
-                fig.text(*at(MARGIN_MM + i * width, strip_top - 8.6), f"{classes[i].low:g}",
-                         ha="center", va="top", fontsize=6)  # fmt: skip
-            fig.text(*at(MARGIN_MM, strip_top + 0.5), "Height (m)", ha="left", va="top",
-                     fontsize=7)  # fmt: skip
+                fig.text(*at(left + i * width, strip_top - 8.6), f"{classes[i].low:g}",
+                         ha="center", va="top", fontsize=6, zorder=z)  # fmt: skip
+            fig.text(*at(left, strip_top + 0.5), "Height (m)", ha="left", va="top",
+                     fontsize=7, zorder=z)  # fmt: skip
     interval_text = f"Contour interval {minor:g} m" + (
         f", index contours every {major:g} m" if major is not None else ""
     )
-    fig.text(*at(MARGIN_MM, strip_top - 17.0), interval_text, ha="left", va="top", fontsize=7)
+    fig.text(*at(left, strip_top - 17.0), interval_text, ha="left", va="top", fontsize=7, zorder=z)
     # scale bar: two halves, black and white, at the map's scale
     bar = scale_bar(grid, fraction=0.3)
     bar_mm = bar.pixels / px
-    bx = pw * 0.62
+    bx = left + 0.62 * (right - left + 2 * MARGIN_MM) - MARGIN_MM
     for k in range(4):
         fig.add_artist(Rectangle(at(bx + k * bar_mm / 4, strip_top - 6.0), bar_mm / 4 / pw,
                                  1.6 / ph, transform=fig.transFigure,
                                  fc="black" if k % 2 == 0 else "white", ec="black",
-                                 lw=0.5))  # fmt: skip
+                                 lw=0.5, zorder=z))  # fmt: skip
     for k, frac in enumerate((0.0, 0.5, 1.0)):
         v = bar.metres * frac
         text = bar.text if k == 2 else (f"{v / 1000:g}" if bar.metres >= 1000 else f"{v:g}")
         fig.text(*at(bx + frac * bar_mm, strip_top - 7.0), text, ha="center", va="top",
-                 fontsize=6)  # fmt: skip
-    fig.text(*at(bx + bar_mm / 2, strip_top - 1.5), f"Scale {n:,}".replace(",", "\u2009")
-             .replace("Scale ", "Scale 1:"), ha="center", va="top", fontsize=8)  # fmt: skip
+                 fontsize=6, zorder=z)  # fmt: skip
+    fig.text(
+        *at(bx + bar_mm / 2, strip_top - 1.5),
+        f"Scale {n:,}".replace(",", "\u2009").replace("Scale ", "Scale 1:"),
+        ha="center",
+        va="top",
+        fontsize=8,
+        zorder=z,
+    )
     # north arrow
     _gamma, note = _north_note(grid)
-    ax_, ay_ = pw - MARGIN_MM - 5.0, strip_top - 9.0
+    ax_, ay_ = right - 5.0, strip_top - 9.0
     tri = np.array([[0.0, 7.0], [-2.2, 0.0], [0.0, 1.6], [2.2, 0.0]])
-    fig.add_artist(Polygon([at(ax_ + x, ay_ + y) for x, y in tri], closed=True,
-                           transform=fig.transFigure, fc="black", ec="black"))  # fmt: skip
-    fig.text(*at(ax_, ay_ + 8.0), "N", ha="center", va="bottom", fontsize=9, weight="bold")
-    fig.text(*at(ax_ + 3.0, ay_ - 2.0), note, ha="right", va="top", fontsize=5.5)
+    fig.add_artist(
+        Polygon(
+            [at(ax_ + x, ay_ + y) for x, y in tri],
+            closed=True,
+            transform=fig.transFigure,
+            fc="black",
+            ec="black",
+            zorder=z,
+        )
+    )
+    fig.text(
+        *at(ax_, ay_ + 8.0), "N", ha="center", va="bottom", fontsize=9, weight="bold", zorder=z
+    )
+    fig.text(*at(ax_ + 3.0, ay_ - 2.0), note, ha="right", va="top", fontsize=5.5, zorder=z)
     if credit:
-        fig.text(*at(MARGIN_MM, strip_top - 22.0), credit, ha="left", va="top", fontsize=6,
-                 color="0.3")  # fmt: skip
+        fig.text(*at(left, strip_top - 22.0), credit, ha="left", va="top", fontsize=6,
+                 color="0.3", zorder=z)  # fmt: skip
     fig.sciviz_map = (img, (x0, y0), n)
     return fig
 
