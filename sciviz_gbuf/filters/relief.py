@@ -188,19 +188,35 @@ def _window(radius: float | None, dx: float, dy: float) -> tuple[int, int]:
     return max(rows, 1), max(cols, 1)
 
 
+def _window_sums(a: np.ndarray, r: int, axis: int) -> np.ndarray:
+    """Sums of ``a`` over the windows ``[i - r, i + r]`` along ``axis``, cut off at the
+    grid's edge: differences of a running sum, padded with its first and last value so that
+    every window is one slice (no gather). The sums of float32 values in float64 are exact
+    (29 spare bits), so they do not depend on where the grid starts (dask chunks agree)."""
+    n = a.shape[axis]
+    run = np.cumsum(a, axis=axis, dtype=np.float64)
+    shape = list(a.shape)
+    shape[axis] = r + 1
+    start = np.zeros(shape, np.float64)
+    end = np.repeat(np.take(run, [n - 1], axis=axis), r, axis=axis)
+    # padded[k + r] is the sum before index k, for k in [-r, n + r] (clipped to [0, n])
+    padded = np.concatenate([start, run, end], axis=axis)
+    hi = [slice(None)] * a.ndim
+    lo = [slice(None)] * a.ndim
+    hi[axis], lo[axis] = slice(2 * r + 1, 2 * r + 1 + n), slice(0, n)
+    return padded[tuple(hi)] - padded[tuple(lo)]
+
+
+def _window_counts(n: int, r: int) -> np.ndarray:
+    """How many of ``0..n-1`` lie in ``[i - r, i + r]``, for each ``i``."""
+    i = np.arange(n)
+    return (np.minimum(i + r, n - 1) - np.maximum(i - r, 0) + 1).astype(np.float64)
+
+
 def _box_sum(a: np.ndarray, ry: int, rx: int) -> np.ndarray:
     """Sums of ``a`` over the (2 ry + 1) x (2 rx + 1) windows centred on each cell, the
-    window cut off at the grid edge (summed-area table, float64, O(cells) for any size)."""
-    h, w = a.shape
-    s = np.zeros((h + 1, w + 1), np.float64)
-    np.cumsum(np.cumsum(a, axis=0, dtype=np.float64), axis=1, out=s[1:, 1:])
-    r0 = np.clip(np.arange(h) - ry, 0, h)
-    r1 = np.clip(np.arange(h) + ry + 1, 0, h)
-    c0 = np.clip(np.arange(w) - rx, 0, w)
-    c1 = np.clip(np.arange(w) + rx + 1, 0, w)
-    return (
-        s[r1][:, c1] - s[r0][:, c1] - s[r1][:, c0] + s[r0][:, c0]
-    )  # fmt: skip
+    window cut off at the grid edge."""
+    return _window_sums(_window_sums(a, ry, 0), rx, 1)
 
 
 def local_relief(
@@ -271,9 +287,14 @@ def local_relief(
     if z.size == 0:
         return z.copy()
     valid = ~np.isnan(z)
-    zero = np.where(valid, z, np.float32(0)).astype(np.float64)
+    zero = np.where(valid, z, np.float32(0))
+    # the mean over the window's data cells: their sum over their count
+    if valid.all():  # the count of a window is that of its rows times that of its columns
+        count = np.outer(_window_counts(z.shape[0], ry), _window_counts(z.shape[1], rx))
+    else:
+        count = _box_sum(valid.astype(np.float32), ry, rx)
     with np.errstate(invalid="ignore", divide="ignore"):
-        trend = _box_sum(zero, ry, rx) / _box_sum(valid.astype(np.float64), ry, rx)
+        trend = _box_sum(zero, ry, rx) / count
     out = ((z - trend) * float(z_factor)).astype(np.float32)
     out[~valid] = np.nan
     return out
