@@ -305,6 +305,9 @@ TERRAIN_CAPTIONS = {
     "topo": "topographic map (Fig. 11 mx3 on the DEM's own 3\" grid, sciviz-gbuf topo): colour "
     "bands every 200 m x GDAL-compatible relief with cast shadows, 200 m / 40 m contours "
     "(automatic: majors at least 6 px apart on the median slope)",
+    "topo_labels": "the same map as a cartographer draws it (sciviz-gbuf topo --relief vat --size 1200 "
+    "--labels): RVT's VAT relief (hillshade, slope, openness, sky view) and the index "
+    "contours' heights in the lines, their tops uphill, the lines broken under them",
     "cn": "(cn) bird's-eye contour image: contour lines of the true height in the G-buffer, "
     "constant width in pixels however far the ground",
     "pr": "(pr) profile image from sz: ridges drawn where they hide the ground behind them",
@@ -321,6 +324,8 @@ def terrain_panels(window_size: tuple[int, int]) -> list[Panel]:
     bird's-eye panels (one capture) and the Fig. 13 sumi-e."""
     dem = load_jacksboro_dem()
     topo = topographic_map(dem, shadows=True)
+    # the cartographer's map: every landform lit (RVT's VAT blend), index contours numbered
+    labelled = topographic_map(dem, relief="vat", labels=True, size=1200)
     gb = birdseye_gbuffer(dem, window_size=window_size, vert_exag=2.0)
     bird = birdseye_panels(gb, background=(1.0, 1.0, 1.0))
     ink = sumi_e(dem, window_size=window_size, elevation_angle=15.0, vert_exag=2.5)
@@ -328,6 +333,7 @@ def terrain_panels(window_size: tuple[int, int]) -> list[Panel]:
     titles |= {"mx2": "(mx2) pr + sh", "mx4": "(mx4) pr + cn + sh + bands"}
     return [
         ("topo", "topographic map (plan view)", topo),
+        ("topo_labels", "topographic map: VAT relief, contour labels reading uphill", labelled),
         *[(k, titles[k], bird[k]) for k in ("cn", "pr", "sh", "mx2", "mx4")],
         ("sumi_e", "Fig. 13 sumi-e", ink),
     ]

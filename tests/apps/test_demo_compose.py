@@ -291,7 +291,7 @@ def test_run_demo_files(demo):
     # the medical figure: Fig. 14 (a), (b), pr, cn, sh, bands + montage; the surface analysis
     # figure: Fig. 15 contours, reflection lines C1/C2, zebra C1/C2, curvature C1/C2, isophotes
     # and the NPR figure: 8 styles + montage
-    assert len(pngs) == 2 * 11 + 1 + 8 + 9 + 6 + 4 + 8 + 8 + 7 + 9 + 9
+    assert len(pngs) == 2 * 11 + 1 + 8 + 9 + 6 + 4 + 8 + 9 + 7 + 9 + 9
     for p in files:
         assert p.is_file() and p.stat().st_size > 0
     contour_figures = ("fig5_", "fig6_", "fig11_")
@@ -304,6 +304,8 @@ def test_run_demo_files(demo):
                 assert im.size == (min(WINDOW), min(WINDOW))
             elif p.name == "fig12_topo.png":  # the plan-view map: one pixel per DEM cell
                 assert im.size == (403, 344)
+            elif p.name == "fig12_topo_labels.png":  # 1200 px wide: labels to read
+                assert im.size == (1200, 1024)
             elif COLOUR_BAR.search(p.name):  # a scalar panel: its colour bar below
                 assert im.size[0] == WINDOW[0] and im.size[1] > WINDOW[1], p.name
             else:
@@ -419,6 +421,8 @@ def test_run_demo_terrain_figure(demo):
 
     topo = rgb("fig12_topo.png")
     assert len(np.unique(topo.reshape(-1, 3), axis=0)) > 50  # bands x relief x lines
+    labelled = rgb("fig12_topo_labels.png")
+    assert len(np.unique(labelled.reshape(-1, 3), axis=0)) > 50
     mx4, pr = rgb("fig12_mx4.png"), rgb("fig12_pr.png")
     ground = (pr < 250).any(axis=-1) | (mx4 != 255).any(axis=-1)
     assert 0.1 < ground.mean() < 0.95  # the terrain, framed, on white
