@@ -305,8 +305,8 @@ TERRAIN_CAPTIONS = {
     "topo": "topographic map (Fig. 11 mx3 on the DEM's own 3\" grid, sciviz-gbuf topo): colour "
     "bands every 200 m x GDAL-compatible relief with cast shadows, 200 m / 40 m contours "
     "(automatic: majors at least 6 px apart on the median slope)",
-    "topo_labels": "the same map as a cartographer draws it (sciviz-gbuf topo --relief vat --size 1200 "
-    "--labels): RVT's VAT relief (hillshade, slope, openness, sky view) and the index "
+    "topo_labels": "the same map as a cartographer draws it (sciviz-gbuf topo --relief vat "
+    "--labels --size 1200): RVT's VAT relief (hillshade, slope, openness, sky view) and the index "
     "contours' heights in the lines, their tops uphill, the lines broken under them",
     "cn": "(cn) bird's-eye contour image: contour lines of the true height in the G-buffer, "
     "constant width in pixels however far the ground",

@@ -16,7 +16,7 @@ from ..datasets import load_jacksboro_dem
 from ..errors import InputError
 from ..readers import read_dem
 from ..recipes.birdseye import birdseye_gbuffer, birdseye_panels, sumi_e
-from ..recipes.labels import contour_labels, labels_to_geojson
+from ..recipes.labels import contour_labels, label_options, labels_to_geojson
 from ..recipes.layout import PAGES, write_map_page
 from ..recipes.terrain import RELIEFS, topographic_map
 from ..writers.cog import (
@@ -446,6 +446,8 @@ def _cmd_birdseye(args: argparse.Namespace) -> int:
         )
     if args.labels and args.contours == "none":
         raise InputError("--labels: --contours none draws no contour lines to label")
+    if args.labels:
+        label_options(args.label_size, args.label_spacing)  # checked before the render
     t0 = time.perf_counter()
     show = show_progress(args)
     dem = _read_terrain(args.dem, args.geographic)

@@ -7,12 +7,18 @@ however far the ground), relief from the normals (``sh``), profile lines from ``
 ridges against what lies behind them) and colour bands, combined as ``mx2`` (pr + sh) and
 ``mx4`` (pr + cn + sh + bands). Pass the G-buffer back in to try other parameters without
 rendering again.
+
+With ``labels=True`` the index contours carry their heights, placed as on a plan-view map
+(:mod:`.labels`) but on the picture's own height image, ``wz``: the text follows the line as
+drawn in perspective, its top towards higher ground as seen (the image-space gradient of
+``wz``), and the contour ink is knocked out under it.
 """
 
 from __future__ import annotations
 
 import os
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -38,10 +44,12 @@ from ._map import (
     rgba,
 )
 from ._resample import view_size
+from .labels import ContourLabel, draw_labels, label_boxes, label_options, place_labels
 
 __all__ = [
     "PAPER",
     "birdseye_gbuffer",
+    "birdseye_label_heights",
     "birdseye_layers",
     "birdseye_map",
     "birdseye_panels",
@@ -214,7 +222,10 @@ def birdseye_layers(
     azimuth: float = 315.0,
     altitude: float = 45.0,
     z_factor: float | None = None,
-) -> dict[str, np.ndarray]:
+    labels: bool = False,
+    label_size: float | None = None,
+    label_spacing: float | None = None,
+) -> dict[str, Any]:
     """The enhanced images of a bird's-eye G-buffer, at its output size (1990 Fig. 12).
 
     ``z_factor``: exaggeration of the relief shade ``sh`` (not of the geometry, which is
@@ -236,7 +247,20 @@ def birdseye_layers(
         cartographic generalisation of the ``cn`` contours (as in
         :func:`~sciviz_gbuf.recipes.terrain.topographic_map`; rings up to 3 widths of the
         widest line dropped), False for the exact lines.
+
+        With ``labels=True`` also ``labels``, a list of
+        :class:`~sciviz_gbuf.recipes.labels.ContourLabel` (``x``, ``y``, ``angle`` in output
+        pixels of the picture; its ``map_*`` fields are not georeferenced in a perspective
+        view), and ``cn`` is knocked out under their boxes (``pr`` is not: labels keep clear
+        of the profile lines). The labelled levels are the multiples of the major interval the
+        contours use (of ``interval`` with one family of lines), placed by
+        :func:`~sciviz_gbuf.recipes.labels.place_labels` on :func:`birdseye_label_heights`;
+        ``label_size``/``label_spacing`` as in
+        :func:`~sciviz_gbuf.recipes.terrain.topographic_map`. Without ``contours`` nothing
+        is labelled.
     """
+    labels = _validate.boolean(labels, "labels")
+    font_px, spacing_px = label_options(label_size, label_spacing)
     check_line_sizes(
         width=width,
         major_width=major_width,
@@ -290,7 +314,7 @@ def birdseye_layers(
         dlo, dhi = float(np.nanmin(depth)), float(np.nanmax(depth))
         depth = (depth - dlo) / max(dhi - dlo, 1e-12)
     rgb = np.where(valid[..., None], rgb, np.nan)
-    return {
+    out: dict[str, Any] = {
         "cn": np.nan_to_num(gb.downsample(np.where(valid, cn, np.nan))),
         "pr": profile_edges(gb, width=profile_width),
         "sh": np.nan_to_num(gb.downsample(sh), nan=1.0),
@@ -299,6 +323,37 @@ def birdseye_layers(
         "wz": gb.downsample(elev),
         "depth": gb.downsample(depth.astype(np.float32)),
     }
+    if labels:
+        placed: list[ContourLabel] = []
+        if contours:
+            # the index contours drawn: the multiples of the major interval (of the interval
+            # when there is one family of lines), as the plan-view map labels them
+            step = float(major_interval if major_interval is not None else interval)
+            placed = place_labels(
+                birdseye_label_heights(out), step=step, band=step, font_px=font_px,
+                spacing_px=spacing_px,
+            )  # fmt: skip
+            # the line is broken under the number (the contour ink only: no box meets a
+            # profile line, see birdseye_label_heights)
+            out["cn"] = out["cn"] * (1.0 - label_boxes(placed, out["cn"].shape))
+        out["labels"] = placed
+    return out
+
+
+def birdseye_label_heights(layers: dict[str, Any]) -> np.ndarray:
+    """The image-space height raster the labels of a bird's-eye picture are placed on: ``wz``
+    of :func:`birdseye_layers` (float64), NaN where the pixel is not wholly terrain (the sky,
+    nodata, the antialiased outline) and under the profile lines ``pr``.
+
+    On a profile line the ground seen jumps from a ridge to the ground behind it: the
+    heights there are neither surface's (an output pixel averages both), and a contour traced
+    through the jump would follow the ridge, not a line of the picture. Masked, the jumps
+    break the traced lines, and no label box (which must lie over heights) reaches across a
+    ridge or the outline.
+    """
+    wz = np.asarray(layers["wz"], dtype=np.float64)
+    whole = (layers["alpha"] >= 1.0) & (layers["pr"] <= 0.0)
+    return np.where(whole, wz, np.nan)
 
 
 def birdseye_panels(
@@ -306,14 +361,20 @@ def birdseye_panels(
     *,
     contour_color: Sequence[float] = CONTOUR_COLOR,
     background: Sequence[float] | None = None,
+    label_color: Sequence[float] | None = None,
     capture_options: dict | None = None,
     **layer_options,
 ) -> dict[str, np.ndarray]:
     """The four pictures of the 1990 Fig. 12 as RGBA uint8: ``cn``, ``pr``, ``mx2``, ``mx4``,
-    plus ``sh`` (see :func:`birdseye_map` for the parameters)."""
+    plus ``sh`` (see :func:`birdseye_map` for the parameters). With ``labels=True`` the
+    pictures with contour lines, ``cn`` and ``mx4``, carry the labels."""
+    colour = _validate.rgb(contour_color, "contour_color")
+    text_colour = None if label_color is None else _validate.rgb(label_color, "label_color")
+    # the label options are checked before anything is rendered
+    _validate.boolean(layer_options.get("labels", False), "labels")
+    font_px, _ = label_options(layer_options.get("label_size"), layer_options.get("label_spacing"))
     gb = _gbuffer_of(dem_or_gbuffer, **(capture_options or {}))
     lay = birdseye_layers(gb, **layer_options)
-    colour = _validate.rgb(contour_color, "contour_color")
     alt = float(layer_options.get("altitude", 45.0))
     flat = np.float32(max(np.sin(np.radians(alt)), 1e-3))
     coloured = lit(lay["bands"], relief_light(lay["sh"] / flat))
@@ -332,7 +393,14 @@ def birdseye_panels(
         "mx2": grey * (1.0 - pr),
         "mx4": (washed * (1.0 - cn4) + dark * cn4) * (1.0 - pr),
     }
-    return {key: rgba(img, lay["alpha"], background) for key, img in images.items()}
+    out = {key: rgba(img, lay["alpha"], background) for key, img in images.items()}
+    placed = lay.get("labels")
+    if placed:
+        # the text in the colour of the lines as drawn (darker in mx4), unless told
+        for key, ink in (("cn", colour), ("mx4", dark)):
+            out[key] = draw_labels(out[key], placed, font_px, ink if text_colour is None
+                                   else text_colour)  # fmt: skip
+    return out
 
 
 def birdseye_map(
@@ -358,6 +426,10 @@ def birdseye_map(
     azimuth: float = 315.0,
     altitude: float = 45.0,
     z_factor: float | None = None,
+    labels: bool = False,
+    label_size: float | None = None,
+    label_spacing: float | None = None,
+    label_color: Sequence[float] | None = None,
     background: Sequence[float] | None = None,
     progress_bar: bool = False,
 ) -> np.ndarray:
@@ -390,6 +462,20 @@ def birdseye_map(
         automatic, as in :func:`~sciviz_gbuf.recipes.terrain.topographic_map`:
         ``clip(tan(10 deg) / m, 1, 20)`` for ``m`` the median slope of the rendered ground
         (:func:`birdseye_layers`); a number is used as it is.
+    labels : bool, default: False
+        Write the heights of the index (major) contours into the lines, as
+        :func:`~sciviz_gbuf.recipes.terrain.topographic_map` ``labels=True`` does on a plan
+        view, but in the picture: the text follows the line as seen, its top towards higher
+        ground as seen (the image-space gradient of the rendered height), the contour ink is
+        knocked out under it; labels keep ``label_spacing`` apart along a line and clear of
+        each other, of the outline, of the profile lines and of the other index contours.
+        :func:`birdseye_layers` ``labels=True`` gives the placements.
+    label_size, label_spacing : float, optional
+        Font height in output pixels (default 11 px, at most ``LIMITS["font_size"]`` = 512)
+        and the least distance between labels along a line (default 25 font sizes).
+    label_color : RGB, optional
+        Colour of the label text (default that of the lines as drawn: ``contour_color``
+        darkened as in ``mx4``).
     background : RGB, optional
         Opaque background colour; default transparent.
     progress_bar : bool, default: False
@@ -400,6 +486,11 @@ def birdseye_map(
         At ``window_size`` (or ``size``/``scale``); transparent where no valid terrain was
         rendered (the sky, nodata holes), antialiased at the outline.
     """
+    # the label options are checked before anything is rendered
+    labels = _validate.boolean(labels, "labels")
+    label_options(label_size, label_spacing)
+    if label_color is not None:
+        _validate.rgb(label_color, "label_color")
     with progress(progress_bar, 3, "bird's-eye map") as bar:
         gb = _gbuffer_of(
             dem,
@@ -428,6 +519,10 @@ def birdseye_map(
             azimuth=azimuth,
             altitude=altitude,
             z_factor=z_factor,
+            labels=labels,
+            label_size=label_size,
+            label_spacing=label_spacing,
+            label_color=label_color,
         )
         bar.step("done")
     return panels["mx4"]
