@@ -24,46 +24,105 @@ from .. import _validate
 from ..errors import InputError
 from .hillshade import check_grid, float32_heights
 
-__all__ = ["default_texture_reach", "local_relief", "texture_shade"]
+__all__ = ["local_relief", "texture_shade"]
 
 #: Default texture detail alpha (Brown's "detail" of 0.5: halfway between the heights, 0,
 #: and their Laplacian, 2).
 TEXTURE_DETAIL = 0.5
-#: Default halo of texture shading on a dask array, in cells.
-TEXTURE_REACH = 256
 #: Default local relief radius, in cells (RVT's ``slrm`` default of 20).
 LOCAL_RELIEF_CELLS = 20
 
 
-def default_texture_reach() -> int:
-    """The default ``reach`` of :func:`texture_shade` on a dask array, in cells."""
-    return TEXTURE_REACH
-
-
-def _filled(z: np.ndarray) -> np.ndarray:
-    """``z`` with each NaN replaced by the nearest valid cell's height (a float32 copy): the
-    spectral filter needs a value everywhere, and a nearest value adds no slope."""
-    bad = np.isnan(z)
-    if not bad.any():
-        return z
-    if bad.all():
-        return np.zeros_like(z)
-    idx = ndimage.distance_transform_edt(bad, return_distances=False, return_indices=True)
-    return z[tuple(idx)]
-
-
-def _plane(f: np.ndarray) -> np.ndarray:
-    """The least-squares plane ``a + b col + c row`` through ``f`` (float64), from the nine
-    sums of its normal equations (no (cells, 3) design matrix is made)."""
-    h, w = f.shape
-    r = np.arange(h, dtype=np.float64) - (h - 1) / 2
+def _row_sums(z: np.ndarray) -> np.ndarray:
+    """(H, 5) float64 sums along each row of whole rows ``z`` (NaN nodata): data cells, and
+    their ``c``, ``c^2``, ``z``, ``z c`` with ``c`` the column from the grid's centre. Each
+    row is summed on its own (numpy's pairwise sum of one contiguous row), so a block of
+    whole rows gives the same sums as the whole grid, bit for bit."""
+    w = z.shape[1]
     c = np.arange(w, dtype=np.float64) - (w - 1) / 2
-    # centred coordinates: the normal equations are diagonal
-    mean = f.mean()
-    sc, sr = (c * c).sum() * h, (r * r).sum() * w
-    b = float((f.sum(axis=0) * c).sum() / sc) if sc else 0.0
-    a = float((f.sum(axis=1) * r).sum() / sr) if sr else 0.0
-    return mean + b * c[None, :] + a * r[:, None]
+    v = np.isfinite(z)
+    vv = v.astype(np.float64)
+    zz = np.where(v, z, 0.0).astype(np.float64)
+    return np.stack(
+        [vv.sum(axis=1), (vv * c).sum(axis=1), (vv * c * c).sum(axis=1), zz.sum(axis=1),
+         (zz * c).sum(axis=1)], axis=1,
+    )  # fmt: skip
+
+
+def _plane_coefficients(sums: np.ndarray) -> tuple[float, float, float]:
+    """``(a, b, c)`` of the least-squares plane ``a + b col + c row`` (coordinates from the
+    grid's centre) through the data cells, from the (H, 5) row sums of :func:`_row_sums`."""
+    h = sums.shape[0]
+    r = np.arange(h, dtype=np.float64) - (h - 1) / 2
+    n, sx, sxx, sz, sxz = sums.T
+    m = np.array([[n.sum(), sx.sum(), (n * r).sum()],
+                  [sx.sum(), sxx.sum(), (sx * r).sum()],
+                  [(n * r).sum(), (sx * r).sum(), (n * r * r).sum()]])  # fmt: skip
+    rhs = np.array([sz.sum(), sxz.sum(), (sz * r).sum()])
+    if not n.sum():
+        return 0.0, 0.0, 0.0
+    coef = np.linalg.lstsq(m, rhs, rcond=None)[0]  # one row or column: the least norm
+    return float(coef[0]), float(coef[1]), float(coef[2])
+
+
+def _plane(shape: tuple[int, int], coef: tuple[float, float, float], chunks=None):
+    """The plane ``a + b col + c row`` on the grid (numpy, or dask with ``chunks``): the same
+    float64 expression either way, so the same values."""
+    h, w = shape
+    a, b, c = coef
+    if chunks is None:
+        cols = np.arange(w, dtype=np.float64) - (w - 1) / 2
+        rows = np.arange(h, dtype=np.float64) - (h - 1) / 2
+    else:
+        import dask.array as da
+
+        cols = da.arange(w, dtype=np.float64, chunks=(chunks[1],)) - (w - 1) / 2
+        rows = da.arange(h, dtype=np.float64, chunks=(chunks[0],)) - (h - 1) / 2
+    return a + b * cols[None, :] + c * rows[:, None]
+
+
+#: Gaussian of the nodata fill (cells) and its reach (4 sigma).
+_FILL_SIGMA = 4.0
+FILL_RADIUS = 16
+
+
+def _fill_residual(r: np.ndarray) -> np.ndarray:
+    """The detrended heights ``r`` (float64, NaN nodata) with each nodata cell within
+    :data:`FILL_RADIUS` cells of data set to the Gaussian-weighted mean of the data around it
+    and the others to 0 (the plane): a value everywhere for the transform, without a step at
+    a nodata border. Each value reads ``FILL_RADIUS`` cells around it only."""
+    valid = np.isfinite(r)
+    if valid.all():
+        return r
+    opts = {"sigma": _FILL_SIGMA, "truncate": FILL_RADIUS / _FILL_SIGMA, "mode": "constant"}
+    num = ndimage.gaussian_filter(np.where(valid, r, 0.0), **opts)
+    den = ndimage.gaussian_filter(valid.astype(np.float64), **opts)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        fill = np.where(den > 1e-6, num / den, 0.0)
+    return np.where(valid, r, fill)
+
+
+def _gain(shape: tuple[int, int], offset: tuple[int, int], full: tuple[int, int], detail: float,
+          dx: float, dy: float) -> np.ndarray:  # fmt: skip
+    """``|k|^alpha`` of the DCT coefficients of a block at ``offset`` in a ``full`` grid."""
+    (h, w), (r0, c0), (fh, fw) = shape, offset, full
+    ky = np.pi * np.arange(r0, r0 + h) / (fh * float(dy))
+    kx = np.pi * np.arange(c0, c0 + w) / (fw * float(dx))
+    return (ky[:, None] ** 2 + kx[None, :] ** 2) ** (detail / 2.0)
+
+
+def _dct_rows(a: np.ndarray, inverse: bool = False) -> np.ndarray:
+    f = _fft.idct if inverse else _fft.dct
+    return f(a, type=2, axis=1, norm="ortho", workers=-1)
+
+
+def _texture_cols(a: np.ndarray, detail: float, dx: float, dy: float, full, block_info=None):
+    """The column transform, the gain and the inverse column transform of a block of whole
+    columns (the middle of the separable filter)."""
+    c0 = 0 if block_info is None else block_info[0]["array-location"][1][0]
+    spectrum = _fft.dct(a, type=2, axis=0, norm="ortho", workers=-1)
+    spectrum *= _gain(a.shape, (0, c0), full, detail, dx, dy)
+    return _fft.idct(spectrum, type=2, axis=0, norm="ortho", workers=-1)
 
 
 def texture_shade(
@@ -74,7 +133,6 @@ def texture_shade(
     dy: float = 1.0,
     z_factor: float = 1.0,
     mask: np.ndarray | None = None,
-    reach: int | None = None,
 ) -> np.ndarray:
     """Texture shading (Brown 2010): the fractional Laplacian of the heights.
 
@@ -88,17 +146,23 @@ def texture_shade(
     ``f`` in cycles per sample), which it equals up to the constant factor ``(2 pi /
     dx)^alpha`` (``|k| = 2 pi |f| / dx``) away from the grid edge.
 
-    The best-fitting plane is taken away first (the fractional Laplacian of a plane is zero),
-    and the rest is extended by mirroring it at the grid's edges (a discrete cosine transform,
-    DCT-II, in place of the reference's zero padding): the edges get neither a cliff nor, from
-    the terrain's overall tilt, a crease, and ``cos(pi m (row + 1/2) / H) cos(pi n (col + 1/2)
-    / W)`` (``m, n >= 1``) is an exact eigenfunction.
+    The least-squares plane through the data is taken away first (the fractional Laplacian of
+    a plane is zero), and the rest is extended by mirroring it at the grid's edges (a
+    discrete cosine transform, DCT-II, in place of the reference's zero padding): the edges
+    get neither a cliff nor, from the terrain's overall tilt, a crease, and ``cos(pi m (row +
+    1/2) / H) cos(pi n (col + 1/2) / W)`` (``m, n >= 1``) is an exact eigenfunction. Nodata
+    cells are filled for the transform with the Gaussian-weighted mean (sigma 4 cells) of the
+    data within 16 cells, and with the plane beyond.
+
+    On a dask array the result is the in-memory one bit for bit and the grid is never in
+    memory at once: one pass fits the plane (row by row), the fill runs chunk by chunk with a
+    16-cell halo, and the separable transform runs over blocks of whole rows, then of whole
+    columns, then of whole rows again (a row or column of the grid must fit in memory).
 
     Parameters
     ----------
     heights : (H, W) array or dask array
-        Heights; NaN and +-inf are nodata (filled with the nearest height for the filter, NaN
-        in the result).
+        Heights; NaN and +-inf are nodata (NaN in the result).
     detail : float in [0, 2], default: 0.5
         ``alpha``, Brown's detail.
     dx, dy : float > 0, default: 1
@@ -107,13 +171,6 @@ def texture_shade(
         Vertical exaggeration (the result scales with it).
     mask : (H, W) bool, optional
         False marks nodata cells.
-    reach : int, optional
-        Dask arrays only: each chunk is filtered with ``reach`` cells of its neighbours around
-        it (default :func:`default_texture_reach`, 256; at most ``LIMITS["reach"]``), the
-        plane taken away per chunk. Landforms wider than about ``reach`` cells come out a
-        little differently from the whole-grid filter: on hilly test terrain in 512-cell
-        chunks (``alpha`` = 0.5) within 6 % of its 99th percentile away from the grid's edge,
-        12 % in the chunks along it (whose halo the edge cuts off).
 
     Returns
     -------
@@ -125,7 +182,7 @@ def texture_shade(
     ------
     InputError
         ``heights`` not a 2-D real array, ``mask`` of another shape, ``detail`` outside
-        [0, 2], a bad cell size, ``z_factor`` or ``reach``.
+        [0, 2], a bad cell size or ``z_factor``.
 
     References
     ----------
@@ -135,41 +192,52 @@ def texture_shade(
     detail = _validate.finite(detail, "detail")
     if not 0.0 <= detail <= 2.0:
         raise InputError(f"detail: expected a texture detail alpha in [0, 2], got {detail!r}")
-    if reach is None:
-        reach = TEXTURE_REACH
-    reach = _validate.count(reach, "reach", "reach")
     if _chunks.any_dask(heights, mask):
-        return _chunks.map_stencil(
-            texture_shade,
-            {"heights": heights, "mask": mask},
-            halo=reach,
-            detail=detail,
-            dx=dx,
-            dy=dy,
-            z_factor=z_factor,
-            reach=reach,
-        )
-    z = check_grid(heights, dx, dy, z_factor)
-    z = float32_heights(z, mask)
+        return _lazy_texture(heights, mask, detail, dx, dy, z_factor)
+    z = float32_heights(check_grid(heights, dx, dy, z_factor), mask)
     if z.size == 0:
         return z.copy()
-    nodata = np.isnan(z)
+    if detail == 0:  # (-Laplacian)^0: the heights themselves
+        return (z * np.float32(z_factor)).astype(np.float32)
     # float64 through the transforms: a float32 DCT of heights of thousands of metres loses
-    # the small waves the filter is for.
-    f = _filled(z).astype(np.float64) * float(z_factor)
-    if detail > 0:
-        f -= _plane(f)  # its gain is 0^alpha: zero, except for the identity alpha = 0
-    h, w = f.shape
-    ky = np.pi * np.arange(h) / (h * float(dy))
-    kx = np.pi * np.arange(w) / (w * float(dx))
-    k2 = ky[:, None] ** 2 + kx[None, :] ** 2
-    # |k|^alpha with 0^0 = 1 (alpha = 0 is the identity) and 0^alpha = 0 otherwise
-    gain = k2 ** (detail / 2.0) if detail > 0 else np.ones_like(k2)
-    spectrum = _fft.dctn(f, type=2, norm="ortho", workers=-1)
-    spectrum *= gain
-    out = _fft.idctn(spectrum, type=2, norm="ortho", workers=-1).astype(np.float32)
-    out[nodata] = np.nan
+    # the small waves the filter is for. The plane's gain is 0^alpha = 0: it is taken away.
+    coef = _plane_coefficients(_row_sums(z))
+    r = _fill_residual((z - _plane(z.shape, coef)) * float(z_factor))
+    out = _dct_rows(_texture_cols(_dct_rows(r), detail, dx, dy, z.shape), inverse=True)
+    out = out.astype(np.float32)
+    out[np.isnan(z)] = np.nan
     return out
+
+
+def _lazy_texture(heights, mask, detail: float, dx: float, dy: float, z_factor: float):
+    """:func:`texture_shade` of dask heights, bit for bit the in-memory result: one pass for
+    the plane (row sums of blocks of whole rows), then the fill chunk by chunk with its halo,
+    and the separable transform as passes over blocks of whole rows and whole columns."""
+    import dask.array as da
+
+    texture_shade(np.zeros((3, 3), np.float32), detail=detail, dx=dx, dy=dy, z_factor=z_factor)
+    z = _chunks.map_stencil(
+        lambda heights, mask=None: float32_heights(np.asarray(heights), mask),
+        {"heights": heights, "mask": mask}, halo=0,
+    )  # fmt: skip
+    chunks = z.chunks
+    shape = z.shape
+    if detail == 0:
+        return (z * np.float32(z_factor)).astype(np.float32)
+    rows = z.rechunk({1: -1})
+    sums = da.map_blocks(_row_sums, rows, dtype=np.float64, chunks=(rows.chunks[0], (5,)))
+    coef = _plane_coefficients(np.asarray(sums.compute()))
+    plane = _plane(shape, coef, chunks)
+    resid = (z.astype(np.float64) - plane) * float(z_factor)
+    filled = _chunks.map_stencil(
+        lambda r: _fill_residual(np.asarray(r)), {"r": resid}, halo=FILL_RADIUS,
+        dtype=np.float64,
+    )  # fmt: skip
+    step = filled.rechunk({1: -1}).map_blocks(_dct_rows, dtype=np.float64)
+    step = step.rechunk({0: -1}).map_blocks(_texture_cols, detail, dx, dy, shape, dtype=np.float64)
+    out = step.rechunk({1: -1}).map_blocks(_dct_rows, True, dtype=np.float64)
+    out = out.rechunk(chunks).astype(np.float32)
+    return da.where(da.isnan(z), np.float32(np.nan), out)
 
 
 def _window(radius: float | None, dx: float, dy: float) -> tuple[int, int]:

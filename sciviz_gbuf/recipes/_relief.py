@@ -90,9 +90,9 @@ def relief_reach(style: str, dx: float, dy: float) -> int:
         return sky_view_reach(_radius(dx, dy), dx, dy)
     if style in ("texture", "local_relief"):
         raise InputError(
-            f"relief: {style!r} takes its contrast from the whole map (and texture shading "
-            "reaches across the whole grid), so a map read in chunks cannot be lit by it; use "
-            "relief='vat', 'openness' or 'hillshade', or a DEM in memory"
+            f"relief: {style!r} takes its contrast from the whole map, so a map read in "
+            "chunks cannot be lit by it; use relief='vat', 'openness' or 'hillshade', or a DEM "
+            "in memory (filters.texture_shade and local_relief themselves take dask arrays)"
         )
     return 0
 
@@ -169,5 +169,9 @@ def relief_shade(
     else:
         detail = local_relief(z, dx=dx, dy=dy, z_factor=zf)  # 20 cells, RVT's default
     q = relief_contrast(detail) if contrast is None else float(contrast)
+    # rounding noise of flat ground is no relief: a floor of a millionth of the height range
+    finite = z[np.isfinite(z)]
+    span = float(finite.max() - finite.min()) if finite.size else 0.0
+    q = max(q, 1e-6 * (span + 1.0))
     scaled = np.clip(0.5 + 0.5 * detail / np.float32(q), 0.0, 1.0)
     return _blend(style, h, detail=scaled)
