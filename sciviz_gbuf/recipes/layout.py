@@ -158,27 +158,37 @@ def _runs(keep: np.ndarray) -> list[tuple[int, int]]:
     return [(a, b) for a, b in zip(edges[::2], edges[1::2], strict=True) if b - a >= 2]
 
 
-#: Along-line window (vertices) over which a minor's spacing is averaged, and the shortest
-#: piece of a minor kept or cut by crowding (vertices): 8 px and 6 px at 0.5 px a vertex.
-_CROWD_WINDOW = 17
+#: Along-line window (vertices) over which a minor's spacing is averaged (16 px at 0.5 px a
+#: vertex), the shortest gap of a minor kept open (6 px) and its shortest piece (40 px): a
+#: printed minor runs on or stops, it is not strewn in crumbs where the ground steepens.
+_CROWD_WINDOW = 33
 _CROWD_PIECE = 12
+_MINOR_PIECE = 80
+
+
+def _flip_short(keep: np.ndarray, value: bool, shortest: int) -> np.ndarray:
+    """``keep`` with its runs of ``value`` shorter than ``shortest`` flipped (not a run that
+    is the whole line)."""
+    keep = keep.copy()
+    n = len(keep)
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], (keep == value).astype(np.int8), [0]])))
+    for a, b in zip(edges[::2], edges[1::2], strict=True):
+        if b - a < shortest and (a > 0 or b < n):
+            keep[a:b] = not value
+    return keep
 
 
 def _uncrowded(spacing: np.ndarray, crowd: float) -> np.ndarray:
     """Which vertices of a minor line stay: where its spacing to the next line, averaged
-    over 8 px along it, is at least ``crowd``; pieces and gaps shorter than 6 px go to their
-    surroundings (a hard threshold on a noisy spacing would draw dashes where the ink fades)."""
+    over 16 px along it, is at least ``crowd``; gaps shorter than 6 px close, then pieces
+    shorter than 40 px go (a hard threshold on a noisy spacing would draw dashes and crumbs
+    where the raster ink fades)."""
     n = len(spacing)
     k = min(_CROWD_WINDOW, n)
     finite = np.where(np.isfinite(spacing), spacing, 1e30)
     smooth = np.convolve(np.pad(finite, k // 2, mode="edge"), np.ones(k) / k, mode="valid")[:n]
-    keep = smooth >= crowd
-    for value in (True, False):  # short kept pieces go, then short gaps close
-        edges = np.flatnonzero(np.diff(np.concatenate([[0], (keep == value).astype(np.int8), [0]])))
-        for a, b in zip(edges[::2], edges[1::2], strict=True):
-            if b - a < _CROWD_PIECE and (a > 0 or b < n):
-                keep[a:b] = not value
-    return keep
+    keep = _flip_short(smooth >= crowd, False, _CROWD_PIECE)
+    return _flip_short(keep, True, _MINOR_PIECE)
 
 
 def _sample(grid: np.ndarray, pts: np.ndarray) -> np.ndarray:
