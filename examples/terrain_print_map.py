@@ -6,8 +6,10 @@ The bundled Jacksboro fault DEM as a printed map: colour bands, relief and conto
 power of ten at which the DEM fits the page's frame: 1:200 000 here), with the index contours'
 heights written into the lines (reading uphill, the line broken under the number), a
 hypsometric legend whose classes are the map's colour bands, a scale bar, a north arrow, a
-title and a credit line. The same page is written as PDF and PNG; the command line does the
-same with ``sciviz-gbuf topo --page A4 --labels -o map.pdf``.
+title, a credit line and the coordinates on the frame. The relief is RVT's VAT blend
+(hillshade, slope, openness, sky view). The same page is written as PDF, whose contour lines
+and labels are vector lines and text over the raster relief, and as PNG; the command line does
+the same with ``sciviz-gbuf topo --page A4 --labels --relief vat --graticule ticks -o map.pdf``.
 
 The labels' positions are also written as GeoJSON points (with their rotation), which a GIS
 can draw over the map.
@@ -32,7 +34,8 @@ def main(outdir: Path) -> list[Path]:
     """Write the page (PDF, PNG) and the labels (GeoJSON) to ``outdir``."""
     outdir.mkdir(parents=True, exist_ok=True)
     dem = load_jacksboro_dem()
-    page = {"page": "A4", "dpi": 200, "title": "Jacksboro fault, Tennessee", "credit": CREDIT}
+    page = {"page": "A4", "dpi": 200, "title": "Jacksboro fault, Tennessee", "credit": CREDIT,
+            "relief": "vat", "graticule": "ticks"}  # fmt: skip
     written = []
     for name in ("topo_page.pdf", "topo_page.png"):
         write_map_page(outdir / name, dem, **page)
