@@ -64,6 +64,9 @@ __all__ = [
 
 #: Supersampling of the rendered text (antialiasing of rotated glyphs).
 TEXT_SUPERSAMPLE = 4
+#: Cost of a place where the text reads uphill only upside down (the straightness cost of
+#: a place is at most 0.3): upright places first, and on a line that has one, only those.
+UPSIDE_DOWN_COST = 10.0
 #: Default label size in output pixels (about 8 pt at 96 dpi).
 DEFAULT_FONT_PX = 11.0
 #: Default label size in points when the map has a print resolution (``dpi``).
@@ -292,7 +295,7 @@ def _candidates(
     d = np.where((up_dot < 0)[:, None], -d, d)
     angle = np.degrees(np.arctan2(-d[:, 1], d[:, 0]))
     upside_down = np.abs(angle) > 90.0
-    cost = dev / text_h + upside_down * 10.0
+    cost = dev / text_h + upside_down * UPSIDE_DOWN_COST
     return s, centre, d, angle, cost
 
 
@@ -407,6 +410,10 @@ def _label_line(
     placed: list[float] = []
     tries = 0
     for i in np.argsort(cost, kind="stable"):
+        if cost[i] >= UPSIDE_DOWN_COST and placed:
+            # the line reads upright somewhere: no label on it is turned upside down (one
+            # that reads uphill only upside down is for a line that has no other)
+            break
         if placed:
             gaps = np.abs(np.asarray(placed) - s[i])
             if line.closed:

@@ -89,15 +89,32 @@ def test_cone_labels_follow_the_rings_and_face_the_apex():
 
 def test_labels_prefer_to_read_upright():
     """On a cone the top of the numbers faces the apex: labels south of it read upright,
-    north of it upside down. Places that read upright are taken first: most labels are
-    south of the apex, and every ring that has one there carries no upside-down label
-    where an upright place was free."""
+    north of it they would be upside down. A line that reads upright somewhere gets no
+    upside-down label: whole rings and the arcs that reach south of the apex are labelled
+    south of it."""
     z = cone()
+    h, w = z.shape
+    cy, cx = (h - 1) / 2, (w - 1) / 2
     labels = sg.contour_labels(z, interval=10.0, major_interval=50.0)
-    upright = [abs(lab.angle) <= 90 for lab in labels]
-    south = [lab.y > (z.shape[0] - 1) / 2 for lab in labels]
-    assert sum(upright) > len(labels) / 2
-    assert upright == south
+    assert len(labels) >= 10
+    for lab in labels:
+        r = np.hypot(lab.x - cx, lab.y - cy)
+        if abs(lab.angle) > 90:
+            # only on a ring the frame cuts into four arcs: the northern one has no upright
+            # place at all
+            assert r > max(cx, cy) and lab.y < cy, lab
+        else:
+            assert lab.y > cy, lab  # upright: south of the apex
+
+
+@pytest.mark.parametrize("name", ["SRTMGL3_40.09_-105.55_40.21_-105.35.asc", "hugo_site.asc"])
+def test_upside_down_labels_only_where_a_line_reads_upright_nowhere(shared_data, name):
+    """Upside-down labels (the text reads uphill only so) are few: lines that have an
+    upright place carry none."""
+    dem = read_dem(shared_data / "dem" / name)
+    labels = sg.contour_labels(dem, size=1600)
+    down = [lab for lab in labels if abs(lab.angle) > 90]
+    assert len(labels) >= 10 and len(down) <= 0.15 * len(labels)
 
 
 def test_label_text():
