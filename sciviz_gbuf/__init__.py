@@ -37,6 +37,11 @@ _EXPORTS = {
     "labels_to_geojson": "recipes.labels",
     "local_client": "writers.cog",
     "write_cog": "writers.cog",
+    "Stroke": "filters.strokes",
+    "vectorize": "filters.strokes",
+    "edge_strokes": "filters.strokes",
+    "write_svg": "writers.vector",
+    "write_pdf": "writers.vector",
 }
 #: Subpackages and modules reachable as attributes (``sg.filters``) without their own import.
 _SUBMODULES = (
@@ -53,17 +58,22 @@ __all__ = [
     "OutputError",
     "RenderError",
     "SciVizGBufError",
+    "Stroke",
     "__version__",
     "birdseye_map",
     "capture",
     "contour_labels",
     "ct_enhance",
+    "edge_strokes",
     "labels_to_geojson",
     "local_client",
     "sumi_e",
     "surface_analysis",
     "topographic_map",
+    "vectorize",
     "write_cog",
+    "write_pdf",
+    "write_svg",
 ]  # = _EXPORTS and __version__ (tests/test_structure.py checks)
 
 
@@ -88,9 +98,11 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerl
     from .core.capture import CaptureSession, capture
     from .core.gbuffer import GBuffer
     from .errors import InputError, OutputError, RenderError, SciVizGBufError
+    from .filters.strokes import Stroke, edge_strokes, vectorize
     from .recipes.birdseye import birdseye_map, sumi_e
     from .recipes.labels import ContourLabel, contour_labels, labels_to_geojson
     from .recipes.medical import ct_enhance
     from .recipes.surface import surface_analysis
     from .recipes.terrain import topographic_map
     from .writers.cog import local_client, write_cog
+    from .writers.vector import write_pdf, write_svg

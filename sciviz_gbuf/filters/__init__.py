@@ -27,12 +27,14 @@ from .operators import (
 from .reflection import highlight_lines, isophotes, reflection_angle, reflection_lines
 from .relief import local_relief, texture_shade
 from .shading import lambert
+from .strokes import Stroke, edge_strokes, simplify, vectorize
 from .terrain_light import cast_shadows, openness, sky_view
 
 __all__ = [
     "BATHYMETRIC",
     "HYPSOMETRIC",
     "ContourPolyline",
+    "Stroke",
     "band_heights",
     "c1_discontinuity",
     "cast_shadows",
@@ -44,6 +46,7 @@ __all__ = [
     "diagonal_depth_discontinuity",
     "diagonal_normal_discontinuity",
     "edge_map",
+    "edge_strokes",
     "enhance",
     "fill_nodata_ring",
     "hatching",
@@ -63,8 +66,10 @@ __all__ = [
     "reflection_angle",
     "reflection_lines",
     "second_order",
+    "simplify",
     "sky_view",
     "sobel_gradient",
     "suppress_zeroth_order",
     "texture_shade",
+    "vectorize",
 ]

@@ -391,6 +391,23 @@ def profile_and_crease_edges(
     return prof, _finish(gb, np.abs(crease), width=width)[0]
 
 
+def buffer_lines(
+    gb: GBuffer,
+    *,
+    crease_angle: float = DEFAULT_CREASE_ANGLE,
+    depth_jump: float = DEFAULT_DEPTH_JUMP,
+    min_length: float = DEFAULT_MIN_LENGTH,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The profile and (unsigned) crease lines of :func:`profile_and_crease_edges` before they
+    are widened and reduced: one buffer pixel wide at the G-buffer's own (supersampled) size,
+    ink in [0, 1], cleaned together with the creases at ``crease_angle``. For tracing them
+    (:func:`~sciviz_gbuf.filters.strokes.edge_strokes`)."""
+    gb = _check_gb(gb)
+    _check_params(depth_jump, crease_angle, 1.0)
+    profile, crease = _lines(gb, depth_jump, crease_angle, _check_min_length(min_length))
+    return profile.copy(), np.abs(crease)
+
+
 def id_edges(gb: GBuffer, *, ids: str = "object", width: float = 1.0) -> np.ndarray:
     """Lines where the object id (or cell id) changes (1990 §3.2 and §5.2).
 

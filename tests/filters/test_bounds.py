@@ -85,6 +85,9 @@ OTHER_FILTERS = {
     ),
     "highlight_lines": (lambda gb, **kw: F.highlight_lines(gb, **kw), "gb"),
     "polylines_to_geojson": (lambda gb, **kw: F.polylines_to_geojson([], **kw), None),
+    "vectorize": (lambda gb, **kw: F.vectorize(np.abs(np.sin(FIELD)), **kw), None),
+    "edge_strokes": (lambda gb, **kw: F.edge_strokes(gb, **kw), None),
+    "simplify": (lambda gb, **kw: F.simplify(np.column_stack([_X[0], FIELD[0]]), **kw), None),
 }
 # The parameters of a filter whose options are passed on to another function.
 OPTION_TARGETS = {"highlight_lines": F.reflection_lines}
