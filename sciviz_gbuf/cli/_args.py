@@ -76,6 +76,24 @@ def png_output(text: str) -> Path:
     return out
 
 
+#: Suffixes of vector pictures (strokes over an optional raster background).
+VECTOR_SUFFIXES = (".svg", ".pdf")
+
+
+def picture_output(text: str) -> tuple[Path, bool]:
+    """``--output`` of a command that writes PNG or vector pictures: the path and True for an
+    .svg or .pdf (checked: suffix, existing folder)."""
+    out = Path(text)
+    suffix = out.suffix.lower()
+    if suffix not in (".png", *VECTOR_SUFFIXES):
+        raise InputError(
+            f"--output: expected a file name ending in .png, .svg or .pdf, got {text!r}"
+        )
+    if not out.parent.is_dir():
+        raise InputError(f"--output: no such directory {str(out.parent)!r}")
+    return out, suffix in VECTOR_SUFFIXES
+
+
 def add_progress(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--progress",

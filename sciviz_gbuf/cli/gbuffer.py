@@ -13,8 +13,9 @@ from ..core.capture import capture
 from ..core.gbuffer import GBuffer
 from ..errors import InputError
 from ..readers import read_mesh
+from ..recipes.vector import BACKGROUNDS, edge_picture, write_vector
 from ..styles import illustrate, styles_for
-from ._args import add_up, number, positive_int, require_coverage, size
+from ._args import add_up, number, picture_output, positive_int, require_coverage, size
 
 __all__ = ["add_capture", "add_edges", "add_info"]
 
@@ -41,11 +42,12 @@ def _cmd_capture(args: argparse.Namespace) -> int:
 
 
 def _cmd_edges(args: argparse.Namespace) -> int:
-    out = Path(args.output)
-    if out.suffix.lower() != ".png":
-        raise InputError(f"--output: expected a file name ending in .png, got {str(out)!r}")
-    if not out.parent.is_dir():
-        raise InputError(f"--output: no such directory {str(out.parent)!r}")
+    out, vector = picture_output(args.output)
+    if args.background is not None and not vector:
+        raise InputError(
+            "--background: the background under vector lines, for an .svg or .pdf --output "
+            f"(a PNG is drawn in --style {args.style})"
+        )
     t0 = time.perf_counter()
     with progress(args.progress, 4, "edges") as bar:
         meshes = [read_mesh(p) for p in args.mesh]
@@ -60,19 +62,32 @@ def _cmd_edges(args: argparse.Namespace) -> int:
         )
         require_coverage(bool(g.mask.any()), args.mesh, args.view)
         bar.step("edges")
-        image = illustrate(
-            g,
-            style=args.style,
-            operator=args.operator,
-            crease_angle=args.crease_angle,
-            depth_jump=args.depth_jump,
-            width=args.width,
-        )
-        bar.step("write")
-        write_png(out, image)
+        if vector:
+            picture = edge_picture(
+                g,
+                crease_angle=args.crease_angle,
+                depth_jump=args.depth_jump,
+                width=args.width,
+                background=args.background or "none",
+            )
+            bar.step("write")
+            write_vector(out, picture, title=", ".join(Path(m).name for m in args.mesh))
+        else:
+            image = illustrate(
+                g,
+                style=args.style,
+                operator=args.operator,
+                crease_angle=args.crease_angle,
+                depth_jump=args.depth_jump,
+                width=args.width,
+            )
+            bar.step("write")
+            write_png(out, image)
         bar.step("done")
     w, h = args.size
-    print(f"wrote {out} ({w}x{h}, style {args.style}) in {time.perf_counter() - t0:.1f} s")
+    what = (f"{len(picture.strokes)} strokes, background {args.background or 'none'}"
+            if vector else f"style {args.style}")  # fmt: skip
+    print(f"wrote {out} ({w}x{h}, {what}) in {time.perf_counter() - t0:.1f} s")
     return 0
 
 
@@ -112,7 +127,10 @@ def add_edges(sub) -> None:
         + ".",
     )
     p.add_argument("mesh", nargs="+", help="mesh file(s) (STL, PLY, OBJ, VTK, VTP, ...)")
-    p.add_argument("-o", "--output", required=True, help="output image (.png)")
+    p.add_argument(
+        "-o", "--output", required=True,
+        help="output image (.png), or profile and crease lines as vector strokes (.svg/.pdf)",
+    )  # fmt: skip
     p.add_argument("--size", type=size, default=(1024, 768), help="image size WxH")
     p.add_argument("--view", default="iso", choices=sorted(VIEWS), help="view direction")
     p.add_argument("--parallel", action="store_true", help="orthographic projection")
@@ -156,6 +174,13 @@ def add_edges(sub) -> None:
         default=_EDGE_DEFAULTS["width"],
         metavar="PX",
         help="line width in output pixels (default 1)",
+    )
+    p.add_argument(
+        "--background",
+        default=None,
+        choices=BACKGROUNDS,
+        help="under the vector lines of an .svg/.pdf: none (white paper, the default) or shade "
+        "(the Lambert shade, embedded as an image)",
     )
     p.add_argument("--progress", action="store_true", help="show a progress bar")
     p.set_defaults(func=_cmd_edges)

@@ -8,12 +8,15 @@ from pathlib import Path
 
 from ..compose import write_png
 from ..core.camera import VIEWS
+from ..core.capture import capture
+from ..errors import InputError
 from ..readers import read_mesh
 from ..recipes.npr import STYLES, npr_image
+from ..recipes.vector import drawing_picture, write_vector
 from ._args import (
     add_progress,
     add_up,
-    png_output,
+    picture_output,
     positive_int,
     require_coverage,
     show_progress,
@@ -34,27 +37,39 @@ def _light(text: str) -> tuple[float, float, float]:
 
 
 def _cmd_mesh(args: argparse.Namespace) -> int:
-    out = png_output(args.output)
+    out, vector = picture_output(args.output)
+    style = "drawing" if args.style == "lines" else args.style
+    if vector and style != "drawing":
+        raise InputError(
+            f"--output: vector output (.svg/.pdf) draws the line style (--style drawing or "
+            f"lines), not {args.style}; for edges over a shaded surface use "
+            "`sciviz-gbuf edges ... --background shade -o out.svg`"
+        )
     t0 = time.perf_counter()
     meshes = [read_mesh(p) for p in args.mesh]
     options = {"light": args.light} if args.light is not None else {}
     if args.style == "toon":
         options["levels"] = args.levels
-    image = npr_image(
-        meshes,
-        style=args.style,
-        view=args.view,
-        window_size=args.size,
-        supersample=args.supersample,
-        progress_bar=show_progress(args),
-        parallel_projection=True if args.parallel else None,
-        up=args.up,
-        **options,
-    )
-    require_coverage(bool((image != 255).any()), args.mesh, args.view)  # not blank paper
-    write_png(out, image)
+    common = {
+        "window_size": args.size,
+        "supersample": args.supersample,
+        "progress_bar": show_progress(args),
+        "parallel_projection": True if args.parallel else None,
+        "up": args.up,
+    }
     names = ", ".join(Path(p).name for p in args.mesh)
-    print(f"wrote {out} ({args.style}) of {names} in {time.perf_counter() - t0:.1f} s")
+    if vector:
+        gb = capture(meshes, camera=args.view, **common)
+        require_coverage(bool(gb.mask.any()), args.mesh, args.view)
+        picture = drawing_picture(gb, **options)
+        write_vector(out, picture, title=names)
+        what = f"{style}, {len(picture.strokes)} strokes"
+    else:
+        image = npr_image(meshes, style=args.style, view=args.view, **common, **options)
+        require_coverage(bool((image != 255).any()), args.mesh, args.view)  # not blank paper
+        write_png(out, image)
+        what = args.style
+    print(f"wrote {out} ({what}) of {names} in {time.perf_counter() - t0:.1f} s")
     return 0
 
 
@@ -68,7 +83,10 @@ def add_mesh(sub) -> None:
         + ".",
     )
     p.add_argument("mesh", nargs="+", help="mesh file(s) (STL, PLY, OBJ, VTK, VTP, ...)")
-    p.add_argument("-o", "--output", required=True, help="output image (.png)")
+    p.add_argument(
+        "-o", "--output", required=True,
+        help="output image (.png), or vector line art (.svg/.pdf) of the drawing style",
+    )  # fmt: skip
     p.add_argument(
         "--style",
         default="gooch",

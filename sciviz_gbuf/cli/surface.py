@@ -9,7 +9,8 @@ from pathlib import Path
 from ..compose import write_png
 from ..readers.patches import read_patches
 from ..recipes.surface import CURVATURES, MODES, surface_analysis, surface_gbuffer
-from ._args import add_progress, add_up, number, png_output, positive_int, show_progress, size
+from ..recipes.vector import surface_picture, write_vector
+from ._args import add_progress, add_up, number, picture_output, positive_int, show_progress, size
 
 __all__ = ["add_patches"]
 
@@ -30,7 +31,7 @@ def _axis(text: str) -> tuple[float, float, float]:
 
 
 def _cmd_patches(args: argparse.Namespace) -> int:
-    out = png_output(args.output)
+    out, vector = picture_output(args.output)
     t0 = time.perf_counter()
     patches = read_patches(args.file)
     gb = surface_gbuffer(
@@ -42,16 +43,14 @@ def _cmd_patches(args: argparse.Namespace) -> int:
         progress_bar=show_progress(args),
         up=args.up,
     )
-    image = surface_analysis(
-        gb,
-        mode=args.mode,
-        axis=args.axis,
-        stripes=args.stripes,
-        width=args.width,
-        curvature=args.curvature,
-        background=(1.0, 1.0, 1.0) if args.white else None,
-    )
-    write_png(out, image)
+    options = {"mode": args.mode, "axis": args.axis, "stripes": args.stripes,
+               "width": args.width, "curvature": args.curvature}  # fmt: skip
+    if vector:  # the lines as strokes over the shaded surface on white paper
+        write_vector(out, surface_picture(gb, **options), title=Path(args.file).name)
+    else:
+        image = surface_analysis(gb, **options,
+                                 background=(1.0, 1.0, 1.0) if args.white else None)  # fmt: skip
+        write_png(out, image)
     print(
         f"wrote {out} ({args.mode}) of {len(patches)} patches from {Path(args.file).name} "
         f"in {time.perf_counter() - t0:.1f} s"
@@ -69,7 +68,10 @@ def add_patches(sub) -> None:
         "stripes, highlight lines, isophotes, a curvature map or contour lines of height.",
     )
     p.add_argument("file", help=".bpt patch file (count; per patch 'du dv' and the points)")
-    p.add_argument("-o", "--output", required=True, help="output image (.png)")
+    p.add_argument(
+        "-o", "--output", required=True,
+        help="output image (.png), or its lines as vector strokes (.svg/.pdf)",
+    )  # fmt: skip
     p.add_argument("--mode", default="reflection", choices=MODES, help="what to draw")
     p.add_argument("--view", default="iso", help="iso, xy, xz, yz, yx, zx or zy")
     add_up(p)

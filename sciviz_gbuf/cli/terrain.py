@@ -19,6 +19,7 @@ from ..recipes.birdseye import birdseye_gbuffer, birdseye_panels, sumi_e
 from ..recipes.labels import contour_labels, label_options, labels_to_geojson
 from ..recipes.layout import PAGES, write_map_page
 from ..recipes.terrain import RELIEFS, topographic_map
+from ..recipes.vector import topographic_picture, write_vector
 from ..writers.cog import (
     check_chunk_memory,
     check_worker_memory,
@@ -27,7 +28,14 @@ from ..writers.cog import (
     write_cog,
 )
 from ..writers.geojson import write_geojson
-from ._args import add_progress, number, png_output, positive_int, show_progress
+from ._args import (
+    VECTOR_SUFFIXES,
+    add_progress,
+    number,
+    png_output,
+    positive_int,
+    show_progress,
+)
 
 __all__ = ["add_birdseye", "add_topo"]
 
@@ -239,13 +247,26 @@ def _topo_paths(args: argparse.Namespace) -> tuple[Path, bool]:
             "--landscape/--title/--credit/--graticule/--furniture: these lay out a page: add "
             "--page A4"
         )
-    if suffix not in (".png", ".tif", ".tiff"):
+    if suffix not in (".png", ".tif", ".tiff", *VECTOR_SUFFIXES):
         raise InputError(
-            f"--output: expected a file name ending in .png or .tif, got {args.output!r}"
+            f"--output: expected a file name ending in .png, .tif, .svg or .pdf, got "
+            f"{args.output!r}"
         )
     if not out.parent.is_dir():
         raise InputError(f"--output: no such directory {str(out.parent)!r}")
-    tif = suffix != ".png"
+    if suffix in VECTOR_SUFFIXES:
+        if lazy:
+            raise InputError(
+                f"--output: a vector map ({suffix}) is drawn in memory; out of core "
+                "(--chunks/--dask) the map is a Cloud-Optimised GeoTIFF (.tif)"
+            )
+        for flag, value in (("--geotiff", args.geotiff), ("--overview", args.overview)):
+            if value is not None:
+                raise InputError(
+                    f"{flag}: a raster copy of the map comes with a .png/.tif --output, not "
+                    f"{suffix}"
+                )
+    tif = suffix in (".tif", ".tiff")
     if lazy and (args.size is not None or args.scale is not None):
         raise InputError(
             f"{'--size' if args.size is not None else '--scale'}: out of core (--chunks/--dask) "
@@ -337,6 +358,8 @@ def _cmd_topo(args: argparse.Namespace) -> int:
     try:
         if args.page is not None:
             return _topo_page(args, source, out, show, t0)
+        if out.suffix.lower() in VECTOR_SUFFIXES:
+            return _topo_vector(args, source, out, show, t0)
         return _topo_in_memory(args, source, out, tif, show, t0)
     finally:
         stop_warmup(second)
@@ -369,6 +392,30 @@ def _topo_in_memory(
     h, w = rgba.shape[:2]
     extra = "".join(f" and {f}" for f in (args.geotiff, args.overview, args.labels_geojson) if f)
     print(f"wrote {out}{extra} ({w}x{h}) in {time.perf_counter() - t0:.1f} s")
+    return 0
+
+
+def _topo_vector(args: argparse.Namespace, source, out: Path, show: bool, t0: float) -> int:
+    """``-o map.svg|map.pdf``: the map's colour and relief as an image, its contour lines as
+    strokes with their levels and its labels as text."""
+    with progress(show, 2, "topo") as bar:
+        dem = _read_terrain(source, args.geographic)
+        bar.step("map")
+        picture = topographic_picture(dem, **_topo_options(args, show))
+        bar.step("write")
+        write_vector(out, picture, title=Path(args.dem[0]).name if args.dem else "Jacksboro")
+        if args.labels_geojson is not None:
+            opts = _topo_options(args, False)
+            keys = ("interval", "major_interval", "size", "scale", "dpi", "label_size",
+                    "label_spacing")  # fmt: skip
+            placed = contour_labels(dem, **{k: opts[k] for k in keys if k in opts})
+            write_geojson(args.labels_geojson, labels_to_geojson(placed, crs=dem.crs))
+    w, h = picture.size
+    extra = f" and {args.labels_geojson}" if args.labels_geojson else ""
+    print(
+        f"wrote {out}{extra} ({w}x{h}, {len(picture.strokes)} contour strokes, "
+        f"{len(picture.texts)} labels) in {time.perf_counter() - t0:.1f} s"
+    )
     return 0
 
 
@@ -532,7 +579,8 @@ def _add_map_style(p: argparse.ArgumentParser, *, tiles: bool = False) -> None:
         "-o",
         "--output",
         required=True,
-        help="output image (.png, or .tif for a Cloud-Optimised GeoTIFF)"
+        help="output image (.png, .tif for a Cloud-Optimised GeoTIFF, or .svg/.pdf: vector "
+        "contours and labels over the map image)"
         if tiles
         else "output image (.png)",
     )

@@ -100,6 +100,11 @@ _MAX_SHIFT = 0.75
 _PASSES = {False: 80, True: 12}
 _TUBE = {False: 0.5, True: 0.25}
 
+#: ``taper``: a stroke is cut where its ink width changes by this factor ...
+_TAPER_STEP = 1.3
+#: ... over at least this many vertices (pixels along it).
+_TAPER_RUN = 9
+
 _OFFSETS4 = ((0, 1), (1, 0), (0, -1), (-1, 0))
 _OFFSETS_DIAG = ((1, 1), (1, -1), (-1, 1), (-1, -1))
 
@@ -215,6 +220,28 @@ def _refine(
     return out, total * step
 
 
+def _width_runs(wid: np.ndarray, closed: bool) -> list[tuple[int, int, float]]:
+    """``(first, last, width)`` vertex runs of a stroke whose ink width (median over
+    ``_TAPER_RUN`` vertices) stays within one step of ``_TAPER_STEP``; runs shorter than
+    ``_TAPER_RUN`` join the run before them."""
+    from scipy import ndimage
+
+    mode = "wrap" if closed else "nearest"
+    smooth = ndimage.median_filter(wid, size=_TAPER_RUN, mode=mode)
+    level = np.round(np.log(np.maximum(smooth, 0.05)) / np.log(_TAPER_STEP)).astype(np.int64)
+    cuts = [0, *(np.flatnonzero(np.diff(level)) + 1).tolist()]
+    runs: list[list[int]] = []
+    for a, b in zip(cuts, [*cuts[1:], len(wid)], strict=True):
+        if runs and b - a < _TAPER_RUN:
+            runs[-1][1] = b
+        else:
+            runs.append([a, b])
+    if len(runs) > 1 and runs[0][1] - runs[0][0] < _TAPER_RUN:
+        runs[1][0] = runs[0][0]
+        runs.pop(0)
+    return [(a, b - 1, float(np.median(smooth[a:b]))) for a, b in runs]
+
+
 def _direction_in(pts: np.ndarray, end: int) -> np.ndarray:
     """Unit direction along a path towards its ``end`` (0 first vertex, 1 last)."""
     a = pts if end == 1 else pts[::-1]
@@ -237,6 +264,7 @@ def vectorize(
     tolerance: float = TOLERANCE,
     min_length: float = 3.0,
     color: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    taper: bool = False,
 ) -> list[Stroke]:
     """Centre-line strokes of a line image (profile, crease, id edges, contours, hatching...).
 
@@ -265,6 +293,10 @@ def vectorize(
     min_length : float in [0, 16384], default: 3
         Strokes shorter than this (pixels along them) are dropped.
     color : RGB in [0, 1], default: black
+    taper : bool, default: False
+        Cut strokes where their ink width changes (by a factor 1.3, over 9 px or more), each
+        piece as wide as its ink: tone-modulated lines (1990 Eq. 20's enhanced hatching)
+        keep their tone. Without it (or with ``width``) a stroke has one width.
 
     Returns
     -------
@@ -290,6 +322,7 @@ def vectorize(
     min_len = _validate.size(min_length, "min_length", "image_side", closed=True)
     fixed = None if width is None else _validate.size(width, "width", "line_width")
     rgb = tuple(float(c) for c in _validate.rgb(color, "color"))
+    tapered = _validate.boolean(taper, "taper")
 
     with np.errstate(invalid="ignore"):
         ink = np.abs(np.nan_to_num(a.astype(np.float32), nan=0.0, posinf=1.0, neginf=1.0))
@@ -414,15 +447,26 @@ def vectorize(
     strokes: list[Stroke] = []
     used = [not x for x in alive]
 
+    def piece(pts: np.ndarray, w: float, closed: bool) -> None:
+        keep = simplify(np.vstack([pts, pts[:1]]), tol)[:-1] if closed else simplify(pts, tol)
+        width = fixed if fixed is not None else round(float(np.clip(w, 0.25, 64.0)), 2)
+        strokes.append(Stroke(keep, width, kind, rgb, None, closed))
+
     def emit(pts: np.ndarray, wid: np.ndarray, closed: bool) -> None:
         if _arc_length(pts, closed) < min_len or len(pts) < 2:
             return
-        if closed:
-            keep = simplify(np.vstack([pts, pts[:1]]), tol)[:-1]
-        else:
-            keep = simplify(pts, tol)
-        w = fixed if fixed is not None else float(np.clip(np.median(wid), 0.25, 64.0))
-        strokes.append(Stroke(keep, round(w, 2) if fixed is None else w, kind, rgb, None, closed))
+        wid = np.where(np.isnan(wid), np.nanmedian(wid) if np.isfinite(wid).any() else 1.0, wid)
+        if fixed is not None or not tapered or len(pts) < 2 * _TAPER_RUN:
+            piece(pts, float(np.median(wid)), closed)
+            return
+        for a, b, w in _width_runs(wid, closed):
+            if a == 0 and b == len(pts) - 1:
+                piece(pts, w, closed)
+            else:  # a run and the first vertex of the next, so the pieces join
+                idx = np.arange(a, b + 2) % len(pts)
+                if not closed and b == len(pts) - 1:
+                    idx = np.arange(a, b + 1)
+                piece(pts[idx], w, False)
 
     def chain(i: int, enter: int) -> None:
         start = (i, enter)
@@ -430,30 +474,26 @@ def vectorize(
         c0 = ends[i][enter]
         if c0 and start not in link:
             pieces.append(centres[c0][None, :])
+            wids.append(np.array([np.nan]))
         closed = False
         while True:
             used[i] = True
             pieces.append(oriented(i, enter))
-            wids.append(widths[i])
-            out = (i, 1 - enter)
+            wids.append(widths[i] if enter == 0 else widths[i][::-1])
             c = ends[i][1 - enter]
-            nxt = link.get(out)
-            if c:
+            nxt = link.get((i, 1 - enter))
+            if c:  # the junction, between this path and the next one (or as the end)
                 pieces.append(centres[c][None, :])
+                wids.append(np.array([np.nan]))
             if nxt is None:
                 break
             if nxt == start:
                 closed = True
-                pieces.pop()  # the junction centre once, between the last and first piece
-                pieces.append(centres[c][None, :])
                 break
             if used[nxt[0]]:
                 break
             i, enter = nxt
-        pts = np.vstack(pieces)
-        if closed and len(pts) > 1 and np.allclose(pts[0], pts[-1]):
-            pts = pts[:-1]
-        emit(pts, np.concatenate(wids), closed)
+        emit(np.vstack(pieces), np.concatenate(wids), closed)
 
     for i in range(len(paths)):
         if used[i] or is_ring[i]:

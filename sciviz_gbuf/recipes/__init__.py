@@ -10,6 +10,7 @@
 - :mod:`.contour_figures`: the panels of their Fig. 5 (contour lines), Fig. 6 (curved hatching)
   and Fig. 11 (a plan-view topographic map of the bundled DEM).
 - :mod:`.npr`: one NPR picture of any scene by style name (the ``mesh`` command).
+- :mod:`.vector`: the same pictures' lines as vector strokes for SVG and PDF.
 
 Shared layers live in the private :mod:`._map` and :mod:`._intervals`. The cameras
 (:mod:`sciviz_gbuf.core.framing`) and the illustrations (:mod:`sciviz_gbuf.styles.illustration`)
@@ -30,12 +31,21 @@ from .medical import ct_enhance, ct_gbuffer, ct_layers, ct_panels, ct_surface, v
 from .saito1990 import CAPTIONS, fig3_panels, fig7_panels, nut_camera
 from .surface import seam_patches, surface_analysis, surface_gbuffer, surface_layers
 from .terrain import map_grid, nice_intervals, topographic_map
+from .vector import (
+    VectorPicture,
+    drawing_picture,
+    edge_picture,
+    surface_picture,
+    topographic_picture,
+    write_vector,
+)
 
 __all__ = [
     "CAPTIONS",
     "CONTOUR_CAPTIONS",
     "STYLES",
     "ContourLabel",
+    "VectorPicture",
     "birdseye_gbuffer",
     "birdseye_layers",
     "birdseye_map",
@@ -46,6 +56,8 @@ __all__ = [
     "ct_layers",
     "ct_panels",
     "ct_surface",
+    "drawing_picture",
+    "edge_picture",
     "fig3_panels",
     "fig5_panels",
     "fig6_panels",
@@ -67,8 +79,11 @@ __all__ = [
     "surface_analysis",
     "surface_gbuffer",
     "surface_layers",
+    "surface_picture",
     "terrain_birdseye_camera",
     "topographic_map",
+    "topographic_picture",
     "view_camera",
     "write_panels",
+    "write_vector",
 ]

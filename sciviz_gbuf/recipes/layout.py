@@ -22,7 +22,7 @@ import numpy as np
 from .. import _validate
 from .._atomic import atomic_output
 from ..errors import InputError
-from ..filters import contour_polylines
+from ..filters import Stroke, contour_polylines, simplify
 from ..filters.contours import MIN_RING_WIDTHS, generalized_field
 from ..readers import DEM
 from ._intervals import contour_intervals
@@ -32,7 +32,14 @@ from .furniture import legend_classes, scale_bar
 from .labels import PAD_FONTS, ContourLabel, label_boxes, label_options, labels_of_grid
 from .terrain import topographic_map
 
-__all__ = ["PAGES", "map_lines", "map_page", "page_scale", "write_map_page"]
+__all__ = [
+    "PAGES",
+    "map_lines",
+    "map_page",
+    "map_strokes",
+    "page_scale",
+    "write_map_page",
+]
 
 #: Page sizes, (width, height) in millimetres, portrait.
 PAGES = {"A4": (210.0, 297.0), "A3": (297.0, 420.0), "letter": (215.9, 279.4)}
@@ -225,6 +232,49 @@ def map_lines(
     list of ((N, 2) float64 points, major)
         ``(x, y)`` in map pixels (column, row; pixel centres at integers, row 0 north).
     """
+    pieces = _map_pieces(grid, interval, major_interval, width, major_width, dense_spacing,
+                         generalize, labels)  # fmt: skip
+    return [(pts, major) for pts, major, _level in pieces]
+
+
+def map_strokes(
+    grid: DEM,
+    *,
+    interval: float | None = None,
+    major_interval: float | None = None,
+    width: float = 1.0,
+    major_width: float = 2.0,
+    dense_spacing: float = 4.0,
+    generalize: bool = True,
+    labels: Sequence[ContourLabel] = (),
+    color: Sequence[float] = CONTOUR_COLOR,
+    tolerance: float = 0.25,
+) -> list[Stroke]:
+    """The lines of :func:`map_lines` as :class:`~sciviz_gbuf.filters.Stroke` (kinds
+    ``"contour"`` and ``"contour-major"``, each with its level) for SVG and PDF, simplified
+    within ``tolerance`` px: every vertex kept is a vertex of the traced line (Eq. 13's
+    contour of the, possibly generalised, heights)."""
+    colour = tuple(float(c) for c in _validate.rgb(color, "contour_color"))
+    tol = _validate.size(tolerance, "tolerance", "line_width", closed=True)
+    out = []
+    for pts, major, level in _map_pieces(grid, interval, major_interval, width, major_width,
+                                         dense_spacing, generalize, labels):  # fmt: skip
+        out.append(Stroke(simplify(pts, tol), float(major_width if major else width),
+                          "contour-major" if major else "contour", colour, level))  # fmt: skip
+    return out
+
+
+def _map_pieces(
+    grid: DEM,
+    interval: float | None,
+    major_interval: float | None,
+    width: float,
+    major_width: float,
+    dense_spacing: float,
+    generalize: bool,
+    labels: Sequence[ContourLabel],
+) -> list[tuple[np.ndarray, bool, float]]:
+    """:func:`map_lines` with each piece's level."""
     heights = np.where(grid.mask, grid.heights, np.nan).astype(np.float32)
     _lo, _hi, minor, major = contour_intervals(heights, interval, major_interval)
     if generalize:
@@ -238,7 +288,7 @@ def map_lines(
     ring = MIN_RING_WIDTHS * widest if generalize else 0.0
     cover = label_boxes(labels, heights.shape) if labels else None
     crowd = dense_spacing - width / 2
-    out: list[tuple[np.ndarray, bool]] = []
+    out: list[tuple[np.ndarray, bool, float]] = []
     for line in lines:
         pts = line.points
         if len(pts) < 2:
@@ -253,7 +303,7 @@ def map_lines(
             keep &= _sample(cover, pts) <= 0.0
         # a stub left between a label's box and a crowded stretch or another box goes
         pieces = [(a, b) for a, b in _runs(keep) if b - a >= _CROWD_PIECE or b - a == len(pts)]
-        out.extend((pts[a:b], bool(line.major)) for a, b in pieces)
+        out.extend((pts[a:b], bool(line.major), float(line.level)) for a, b in pieces)
     return out
 
 
