@@ -62,6 +62,7 @@ LIMITS: dict[str, float] = {
     "dpi": 9600,  # dots per inch of a map scale or a PNG's pHYs (high-end scanners, printers)
     "supersample": 8,  # capture supersampling factor
     "image_pixels": 2**28,  # width x height x supersample^2 of one capture
+    "layers": 8,  # surfaces kept per pixel by capture(layers=k)
     "font_size": 512.0,  # px: contour label and map furniture text
     "label_spacing": 16384.0,  # px: distance between contour labels along a line
 }

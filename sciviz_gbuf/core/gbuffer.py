@@ -27,6 +27,7 @@ __all__ = ["FORMAT_VERSION", "META_KEY", "GBuffer", "check_gbuffer"]
 
 FORMAT_VERSION = 1
 _SCALAR_PREFIX = "scalars:"
+_LAYER_PREFIX = "layer"
 META_KEY = "sciviz_gbuf_meta"
 # (name, dtype, trailing shape) of the fixed channels
 _CHANNELS: tuple[tuple[str, type, tuple[int, ...]], ...] = (
@@ -71,6 +72,10 @@ class GBuffer:
         Factor by which the buffers exceed the output image size (see :meth:`downsample`).
     object_names : list of str
         Label of each object id.
+    layers : tuple of GBuffer
+        The surfaces behind this one along each pixel's ray, nearest first
+        (``capture(layers=k)``: ``k - 1`` of them, each with the same channels and camera; a
+        pixel with fewer surfaces behind it is background there). Empty by default.
 
     Row 0 of every array is the top image row, as in a PNG.
     """
@@ -87,6 +92,7 @@ class GBuffer:
     scalars: dict[str, np.ndarray] = field(default_factory=dict)
     supersample: int = 1
     object_names: list[str] = field(default_factory=list)
+    layers: tuple[GBuffer, ...] = ()
 
     # ------------------------------------------------------------------ basics
     @property
@@ -107,6 +113,9 @@ class GBuffer:
             out["uv"] = self.uv
         for k, v in self.scalars.items():
             out[_SCALAR_PREFIX + k] = v
+        for i, layer in enumerate(self.layers, start=2):
+            for k, v in layer.channels().items():
+                out[f"{_LAYER_PREFIX}{i}:{k}"] = v
         return out
 
     def world_normal(self) -> np.ndarray:
@@ -150,6 +159,7 @@ class GBuffer:
             f"coverage={self.mask.mean():.1%}, objects={len(self.object_names)}, "
             f"projection={'parallel' if self.camera.parallel_projection else 'perspective'}"
             + (f", extra={extra}" if extra else "")
+            + (f", layers={1 + len(self.layers)}" if self.layers else "")
             + ")"
         )
 
@@ -163,6 +173,7 @@ class GBuffer:
                 "supersample": self.supersample,
                 "object_names": list(self.object_names),
                 "scalars": list(self.scalars),
+                "layers": len(self.layers),
             }
         )
 
@@ -213,12 +224,29 @@ class GBuffer:
                 raise InputError(f"{path}: G-buffer file lacks scalar {name!r}")
             scalars[name] = np.ascontiguousarray(arrays[key])
         uv = np.ascontiguousarray(arrays["uv"]) if "uv" in arrays else None
+        n_layers = meta.get("layers", 0)
+        if isinstance(n_layers, bool) or not isinstance(n_layers, int):
+            raise InputError(f"{path}: layers: expected an integer, got {n_layers!r}")
+        if not 0 <= n_layers < LIMITS["layers"]:
+            raise InputError(
+                f"{path}: layers: expected 0 to {LIMITS['layers'] - 1:g} behind the first, "
+                f"got {n_layers}"
+            )
+        behind = []
+        sub_meta = json.dumps({**meta, "layers": 0})
+        for i in range(2, n_layers + 2):
+            prefix = f"{_LAYER_PREFIX}{i}:"
+            sub = {k[len(prefix) :]: v for k, v in arrays.items() if k.startswith(prefix)}
+            if not sub:
+                raise InputError(f"{path}: G-buffer file lacks layer {i}")
+            behind.append(cls._from_arrays(sub, sub_meta, f"{path} (layer {i})"))
         return cls(
             camera=camera,
             uv=uv,
             scalars=scalars,
             supersample=supersample,
             object_names=list(meta.get("object_names", [])),
+            layers=tuple(behind),
             **kw,
         )
 
