@@ -13,7 +13,14 @@ from ..core.capture import capture
 from ..core.gbuffer import GBuffer
 from ..errors import InputError
 from ..readers import read_mesh
-from ..recipes.vector import BACKGROUNDS, edge_picture, write_vector
+from ..recipes.vector import (
+    BACKGROUNDS,
+    HIDDEN,
+    edge_picture,
+    technical_drawing,
+    technical_drawing_image,
+    write_vector,
+)
 from ..styles import illustrate, styles_for
 from ._args import add_up, number, picture_output, positive_int, require_coverage, size
 
@@ -43,11 +50,13 @@ def _cmd_capture(args: argparse.Namespace) -> int:
 
 def _cmd_edges(args: argparse.Namespace) -> int:
     out, vector = picture_output(args.output)
-    if args.background is not None and not vector:
+    if args.background is not None and not (vector or args.hidden):
         raise InputError(
-            "--background: the background under vector lines, for an .svg or .pdf --output "
-            f"(a PNG is drawn in --style {args.style})"
+            "--background: the background under line art (an .svg/.pdf --output, or "
+            f"--hidden); a PNG is drawn in --style {args.style}"
         )
+    if args.layers is not None and not args.hidden:
+        raise InputError("--layers: the surfaces behind are for hidden lines: add --hidden")
     t0 = time.perf_counter()
     with progress(args.progress, 4, "edges") as bar:
         meshes = [read_mesh(p) for p in args.mesh]
@@ -59,10 +68,23 @@ def _cmd_edges(args: argparse.Namespace) -> int:
             parallel_projection=True if args.parallel else None,
             supersample=args.supersample,
             up=args.up,
+            layers=int(args.layers or 4) if args.hidden else 1,
         )
         require_coverage(bool(g.mask.any()), args.mesh, args.view)
         bar.step("edges")
-        if vector:
+        title = ", ".join(Path(m).name for m in args.mesh)
+        line_art = {"crease_angle": args.crease_angle, "depth_jump": args.depth_jump,
+                    "width": args.width, "background": args.background or "none"}  # fmt: skip
+        if args.hidden:
+            if vector:
+                picture = technical_drawing(g, hidden=args.hidden, **line_art)
+                bar.step("write")
+                write_vector(out, picture, title=title)
+            else:
+                image = technical_drawing_image(g, hidden=args.hidden, **line_art)
+                bar.step("write")
+                write_png(out, image)
+        elif vector:
             picture = edge_picture(
                 g,
                 crease_angle=args.crease_angle,
@@ -71,7 +93,7 @@ def _cmd_edges(args: argparse.Namespace) -> int:
                 background=args.background or "none",
             )
             bar.step("write")
-            write_vector(out, picture, title=", ".join(Path(m).name for m in args.mesh))
+            write_vector(out, picture, title=title)
         else:
             image = illustrate(
                 g,
@@ -85,8 +107,12 @@ def _cmd_edges(args: argparse.Namespace) -> int:
             write_png(out, image)
         bar.step("done")
     w, h = args.size
-    what = (f"{len(picture.strokes)} strokes, background {args.background or 'none'}"
-            if vector else f"style {args.style}")  # fmt: skip
+    if args.hidden:
+        what = f"hidden lines {args.hidden}, background {args.background or 'none'}"
+    elif vector:
+        what = f"{len(picture.strokes)} strokes, background {args.background or 'none'}"
+    else:
+        what = f"style {args.style}"
     print(f"wrote {out} ({w}x{h}, {what}) in {time.perf_counter() - t0:.1f} s")
     return 0
 
@@ -181,6 +207,20 @@ def add_edges(sub) -> None:
         choices=BACKGROUNDS,
         help="under the vector lines of an .svg/.pdf: none (white paper, the default) or shade "
         "(the Lambert shade, embedded as an image)",
+    )
+    p.add_argument(
+        "--hidden",
+        default=None,
+        choices=HIDDEN,
+        help="a technical drawing: visible edges solid, the edges behind them dashed or thin "
+        "(captures the surfaces behind: --layers)",
+    )
+    p.add_argument(
+        "--layers",
+        type=number(lambda v: v == int(v) and 2 <= v <= 8, "a whole number of surfaces in [2, 8]"),
+        default=None,
+        metavar="K",
+        help="with --hidden: surfaces kept along each ray, the visible one included (default 4)",
     )
     p.add_argument("--progress", action="store_true", help="show a progress bar")
     p.set_defaults(func=_cmd_edges)

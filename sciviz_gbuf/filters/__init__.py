@@ -9,6 +9,7 @@ from .edges import (
     crease_edges,
     edge_map,
     enhance,
+    hidden_edges,
     id_edges,
     internal_edges,
     profile_and_crease_edges,
@@ -27,7 +28,16 @@ from .operators import (
 from .reflection import highlight_lines, isophotes, reflection_angle, reflection_lines
 from .relief import local_relief, texture_shade
 from .shading import lambert
-from .strokes import Stroke, edge_strokes, simplify, vectorize
+from .strokes import (
+    Stroke,
+    bridge,
+    dash_pieces,
+    draw_strokes,
+    edge_strokes,
+    paint_strokes,
+    simplify,
+    vectorize,
+)
 from .terrain_light import cast_shadows, openness, sky_view
 
 __all__ = [
@@ -36,6 +46,7 @@ __all__ = [
     "ContourPolyline",
     "Stroke",
     "band_heights",
+    "bridge",
     "c1_discontinuity",
     "cast_shadows",
     "color_bands",
@@ -43,13 +54,16 @@ __all__ = [
     "contour_lines",
     "contour_polylines",
     "crease_edges",
+    "dash_pieces",
     "diagonal_depth_discontinuity",
     "diagonal_normal_discontinuity",
+    "draw_strokes",
     "edge_map",
     "edge_strokes",
     "enhance",
     "fill_nodata_ring",
     "hatching",
+    "hidden_edges",
     "highlight_lines",
     "hillshade",
     "id_edges",
@@ -60,6 +74,7 @@ __all__ = [
     "modulated_hatching",
     "normalize_gradient",
     "openness",
+    "paint_strokes",
     "polylines_to_geojson",
     "profile_and_crease_edges",
     "profile_edges",

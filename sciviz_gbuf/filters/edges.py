@@ -41,6 +41,7 @@ __all__ = [
     "crease_edges",
     "edge_map",
     "enhance",
+    "hidden_edges",
     "id_edges",
     "internal_edges",
     "profile_and_crease_edges",
@@ -406,6 +407,58 @@ def buffer_lines(
     _check_params(depth_jump, crease_angle, 1.0)
     profile, crease = _lines(gb, depth_jump, crease_angle, _check_min_length(min_length))
     return profile.copy(), np.abs(crease)
+
+
+#: Hidden lines within this many output pixels of a line of a nearer layer are that line.
+HIDDEN_CLEARANCE = 1.5
+
+
+def hidden_edges(
+    gb: GBuffer,
+    *,
+    crease_angle: float = DEFAULT_CREASE_ANGLE,
+    depth_jump: float = DEFAULT_DEPTH_JUMP,
+    width: float = 1.0,
+    min_length: float = DEFAULT_MIN_LENGTH,
+) -> np.ndarray:
+    """Hidden lines: the profile and crease lines of the surfaces behind the visible one
+    (1990 §3.2's edges of the extended G-buffer of §5.1), for dashed or thin drawing.
+
+    ``gb`` must hold the layers behind its first surface (``capture(..., layers=k)``, k >= 2).
+    Each layer's lines are found as :func:`profile_and_crease_edges` finds the visible ones
+    (same ``crease_angle``, ``depth_jump``, ``min_length``); a line of a layer within
+    ``HIDDEN_CLEARANCE`` = 1.5 px of a line of a nearer layer is dropped: it is that line (a
+    hidden edge seen end-on behind a visible one) or where the layer's surface changes
+    because a nearer surface ends there (the outline of a plate in front of a box).
+
+    Returns
+    -------
+    (H, W) float32 ink in [0, 1] at the output size, ``width`` px wide (at most 64).
+    """
+    from scipy import ndimage
+
+    gb = _check_gb(gb)
+    _check_params(depth_jump, crease_angle, width)
+    if not gb.layers:
+        raise InputError(
+            "gb: hidden lines need the surfaces behind the visible one: capture the G-buffer "
+            "with layers=2 or more"
+        )
+    opts = {"crease_angle": crease_angle, "depth_jump": depth_jump,
+            "min_length": min_length, "signed": False}  # fmt: skip
+    prof, crease = profile_and_crease_edges(gb, **opts)
+    nearer = (prof >= 0.5) | (crease >= 0.5)
+    out = np.zeros(gb.output_shape, np.float32)
+    for layer in gb.layers:
+        prof, crease = profile_and_crease_edges(layer, **opts)
+        ink = np.maximum(prof, crease)
+        near = ndimage.distance_transform_edt(~nearer) <= HIDDEN_CLEARANCE
+        np.maximum(out, np.where(near, np.float32(0.0), ink), out=out)
+        nearer |= ink >= 0.5
+    size = max(1, round(float(width)))
+    if size > 1:
+        out = ndimage.grey_dilation(out, footprint=_disk(size), mode="constant", cval=0.0)
+    return out.astype(np.float32, copy=False)
 
 
 def id_edges(gb: GBuffer, *, ids: str = "object", width: float = 1.0) -> np.ndarray:

@@ -10,6 +10,7 @@ so that a stroke keeps its shape with few vertices.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import NamedTuple
 
 import numpy as np
@@ -19,7 +20,16 @@ from ..core.gbuffer import GBuffer
 from ..errors import InputError
 from .edges import buffer_lines, profile_and_crease_edges
 
-__all__ = ["Stroke", "edge_strokes", "simplify", "vectorize"]
+__all__ = [
+    "Stroke",
+    "bridge",
+    "dash_pieces",
+    "draw_strokes",
+    "edge_strokes",
+    "paint_strokes",
+    "simplify",
+    "vectorize",
+]
 
 #: Default simplification tolerance, pixels.
 TOLERANCE = 0.25
@@ -41,6 +51,9 @@ class Stroke(NamedTuple):
     """The field value along a contour line (None for other lines)."""
     closed: bool = False
     """True for a ring (the last vertex joins the first)."""
+    dash: tuple[float, float] | None = None
+    """``(on, off)`` lengths in pixels of a dashed stroke, the pattern running on along the
+    whole stroke from its first vertex (through its vertices); None for a solid line."""
 
 
 def simplify(points: np.ndarray, tolerance: float = TOLERANCE) -> np.ndarray:
@@ -562,3 +575,148 @@ def edge_strokes(
             # buffer pixel centre i sits at output position (i + 0.5) / k - 0.5
             out.append(s._replace(points=(s.points + 0.5) / k - 0.5, width=w))
     return out
+
+
+def bridge(
+    strokes: Sequence[Stroke], *, gap: float, turn: float = 15.0, tolerance: float = TOLERANCE
+) -> list[Stroke]:
+    """Open strokes joined across gaps: two ends at most ``gap`` px apart, each stroke's end
+    direction and the gap's own direction within ``turn`` degrees, become one stroke (the
+    nearest pairs first; strokes of one kind only). For a line interrupted where another
+    crosses it (a hidden edge behind a visible one), so that it is one stroke again and its
+    dash pattern runs on across the crossing. A joined stroke is simplified again within
+    ``tolerance`` px (:func:`simplify`)."""
+    g = _validate.size(gap, "gap", "spacing")
+    cos_turn = np.cos(np.radians(_validate.number_in(turn, "turn", 0.0, 90.0)))
+    tol = _validate.size(tolerance, "tolerance", "line_width", closed=True)
+    items = [list(s) for s in strokes]
+    alive = [True] * len(items)
+
+    def ends(i: int):
+        pts = np.asarray(items[i][0], np.float64)
+        return [(pts[0], _direction_in(pts, 0)), (pts[-1], _direction_in(pts, 1))]
+
+    while True:
+        best = None
+        for i in range(len(items)):
+            if not alive[i] or items[i][5] or len(items[i][0]) < 2:
+                continue
+            for j in range(i + 1, len(items)):
+                if (
+                    not alive[j]
+                    or items[j][5]
+                    or len(items[j][0]) < 2
+                    or items[j][2] != items[i][2]
+                ):
+                    continue
+                for ei, (pi, di) in enumerate(ends(i)):
+                    for ej, (pj, dj) in enumerate(ends(j)):
+                        v = pj - pi
+                        dist = float(np.hypot(*v))
+                        if dist > g or (best is not None and dist >= best[0]):
+                            continue
+                        # di points out of stroke i at its end, dj out of stroke j at its end
+                        if float(di @ -dj) < cos_turn:
+                            continue
+                        if dist > 0 and float(di @ (v / dist)) < cos_turn:
+                            continue
+                        best = (dist, i, ei, j, ej)
+        if best is None:
+            break
+        _, i, ei, j, ej = best
+        a = np.asarray(items[i][0], np.float64)
+        b = np.asarray(items[j][0], np.float64)
+        a = a if ei == 1 else a[::-1]  # a ends at the gap
+        b = b if ej == 0 else b[::-1]  # b starts at it
+        items[i][0] = simplify(np.vstack([a, b]), tol)
+        alive[j] = False
+    return [Stroke(*it) for it, ok in zip(items, alive, strict=True) if ok]
+
+
+# --------------------------------------------------------------------------- drawing
+def _polyline(s: Stroke) -> np.ndarray:
+    pts = np.asarray(s.points, np.float64)
+    if pts.ndim != 2 or pts.shape[1] != 2 or not np.isfinite(pts).all():
+        raise InputError(f"strokes: expected finite (N, 2) points, got shape {pts.shape}")
+    return np.vstack([pts, pts[:1]]) if s.closed and len(pts) > 2 else pts
+
+
+def _check_dash(dash: object) -> tuple[float, float]:
+    if np.ndim(dash) != 1 or len(dash) != 2:
+        raise InputError(f"dash: expected (on, off) lengths in pixels, got {_validate.brief(dash)}")
+    on = _validate.size(dash[0], "dash", "spacing")
+    off = _validate.size(dash[1], "dash", "spacing")
+    return on, off
+
+
+def dash_pieces(stroke: Stroke) -> list[np.ndarray]:
+    """The polylines a stroke is drawn as: itself (closed: its first vertex repeated at the
+    end) or, dashed, its pieces ``[k p, k p + on]`` along its arc length (``p = on + off``),
+    so the pattern runs on through the vertices as SVG's ``stroke-dasharray`` does."""
+    pts = _polyline(stroke)
+    if stroke.dash is None or len(pts) < 2:
+        return [pts]
+    on, off = _check_dash(stroke.dash)
+    cum = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(pts, axis=0).T))])
+    total = float(cum[-1])
+    if total <= 0:
+        return []
+    pieces = []
+    for a in np.arange(0.0, total, on + off):
+        b = min(a + on, total)
+        inner = (cum > a) & (cum < b)
+        at = np.concatenate([[a], cum[inner], [b]])
+        pieces.append(
+            np.column_stack([np.interp(at, cum, pts[:, 0]), np.interp(at, cum, pts[:, 1])])
+        )
+    return pieces
+
+
+def draw_strokes(strokes: Sequence[Stroke], shape: tuple[int, int]) -> np.ndarray:
+    """Antialiased ink (H, W) float32 in [0, 1] of ``strokes`` on an image of ``shape``: each
+    stroke (or each of its dashes, :func:`dash_pieces`) ``width`` px wide, butt ends and round
+    joints, as an SVG viewer draws it (:func:`~sciviz_gbuf.writers.write_svg`)."""
+    from . import _stroke_kernels
+
+    if np.ndim(shape) != 1 or len(shape) != 2:
+        raise InputError(f"shape: expected (H, W), got {_validate.brief(shape)}")
+    h, w = (int(_validate.size(v, "shape", "image_side", buffer=True)) for v in shape)
+    segs, widths, caps = [], [], []
+    for s in strokes:
+        width = _validate.size(s.width, "strokes: width", "line_width")
+        ring = s.closed and s.dash is None
+        for piece in dash_pieces(s):
+            n = len(piece) - 1
+            if n < 1:
+                continue
+            segs.append(np.column_stack([piece[:-1], piece[1:]]))
+            widths.append(np.full(n, width))
+            cap = np.ones((n, 2), bool)
+            if not ring:
+                cap[0, 0] = cap[-1, 1] = False
+            caps.append(cap)
+    out = np.zeros((h, w), np.float32)
+    if segs:
+        _stroke_kernels.draw_segments(
+            np.ascontiguousarray(np.concatenate(segs)), np.concatenate(widths),
+            np.ascontiguousarray(np.concatenate(caps)), out,
+        )  # fmt: skip
+    return out
+
+
+def paint_strokes(strokes: Sequence[Stroke], background: np.ndarray) -> np.ndarray:
+    """``background`` (H, W) or (H, W, 3) float in [0, 1] with ``strokes`` painted over it in
+    their colours (in order of their kinds' first appearance), float32 (H, W, 3)."""
+    bg = np.asarray(background, dtype=np.float32)
+    if bg.ndim == 2:
+        bg = np.repeat(bg[..., None], 3, axis=2)
+    if bg.ndim != 3 or bg.shape[2] != 3:
+        raise InputError(f"background: expected (H, W) or (H, W, 3), got shape {bg.shape}")
+    img = np.clip(bg, 0.0, 1.0).copy()
+    groups: dict[tuple, list[Stroke]] = {}
+    for s in strokes:
+        groups.setdefault((str(s.kind), tuple(float(c) for c in s.color)), []).append(s)
+    for (_kind, color), group in groups.items():
+        ink = draw_strokes(group, img.shape[:2])[..., None]
+        img = img * (1.0 - ink) + np.asarray(color, np.float32) * ink
+    return img.astype(np.float32, copy=False)

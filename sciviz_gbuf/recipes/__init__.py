@@ -36,6 +36,8 @@ from .vector import (
     drawing_picture,
     edge_picture,
     surface_picture,
+    technical_drawing,
+    technical_drawing_image,
     topographic_picture,
     write_vector,
 )
@@ -80,6 +82,8 @@ __all__ = [
     "surface_gbuffer",
     "surface_layers",
     "surface_picture",
+    "technical_drawing",
+    "technical_drawing_image",
     "terrain_birdseye_camera",
     "topographic_map",
     "topographic_picture",

@@ -22,7 +22,8 @@ import numpy as np
 from .. import _validate
 from ..core.gbuffer import GBuffer, check_gbuffer
 from ..errors import InputError
-from ..filters import Stroke, edge_strokes, vectorize
+from ..filters import Stroke, bridge, edge_strokes, hidden_edges, paint_strokes, vectorize
+from ..filters.edges import HIDDEN_CLEARANCE
 from ..styles.illustration import shade_image
 from ..writers.vector import SvgText, write_strokes
 from ._map import CONTOUR_COLOR, as_dem
@@ -34,16 +35,25 @@ from .terrain import topographic_map
 
 __all__ = [
     "BACKGROUNDS",
+    "HIDDEN",
+    "HIDDEN_GREY",
     "VectorPicture",
     "drawing_picture",
     "edge_picture",
     "surface_picture",
+    "technical_drawing",
+    "technical_drawing_image",
     "topographic_picture",
     "write_vector",
 ]
 
 #: Backgrounds of :func:`edge_picture`: paper only, or the Lambert shade under the lines.
 BACKGROUNDS = ("none", "shade")
+#: How :func:`technical_drawing` draws hidden lines: dashed (ISO 128's type of line for
+#: hidden edges, dashes 6 and gaps 3 line widths long, at least 4 and 2 px) or thin and grey.
+HIDDEN = ("dashed", "thin")
+#: Colour of thin hidden lines.
+HIDDEN_GREY = (0.45, 0.45, 0.45)
 
 
 class VectorPicture(NamedTuple):
@@ -96,6 +106,60 @@ def edge_picture(
                            min_length=min_length)  # fmt: skip
     image = shade_image(gb) if bg == "shade" else None
     return VectorPicture(strokes, _size(gb), image)
+
+
+def technical_drawing(
+    gb: GBuffer,
+    *,
+    hidden: str | None = "dashed",
+    width: float = 1.0,
+    crease_angle: float = 30.0,
+    depth_jump: float = 1.0,
+    min_length: float = 5.0,
+    background: str = "none",
+) -> VectorPicture:
+    """A technical line drawing: the visible profile and crease lines solid (kinds
+    ``"profile"``, ``"crease"``) and the hidden ones (kind ``"hidden"``: the edges of the
+    surfaces behind, :func:`~sciviz_gbuf.filters.hidden_edges`) dashed, thin and grey, or
+    left out (``hidden=None``).
+
+    ``gb`` needs its layers behind (``capture(..., layers=k)``, k >= 2) unless ``hidden`` is
+    None. A dashed stroke's pattern runs on along the whole stroke, through its vertices.
+    """
+    gb = check_gbuffer(gb)
+    if hidden is not None:
+        hidden = _validate.choice(hidden, "hidden", HIDDEN)
+    pic = edge_picture(gb, crease_angle=crease_angle, depth_jump=depth_jump, width=width,
+                       min_length=min_length, background=background)  # fmt: skip
+    if hidden is None:
+        return pic
+    w = _validate.size(width, "width", "line_width")
+    ink = hidden_edges(gb, crease_angle=crease_angle, depth_jump=depth_jump,
+                       min_length=min_length)  # fmt: skip
+    if hidden == "dashed":
+        style = {"width": w, "dash": (max(4.0, 6.0 * w), max(2.0, 3.0 * w))}
+    else:
+        style = {"width": max(0.5, 0.5 * w), "color": HIDDEN_GREY}
+    traced = vectorize(ink, kind="hidden", width=style["width"], min_length=3.0)
+    # a hidden line is cut where a visible one crosses it (hidden_edges' clearance): one
+    # stroke again, so its dashes run on across
+    traced = bridge(traced, gap=2.0 * HIDDEN_CLEARANCE + 6.0)
+    if "dash" in style:
+        traced = [s._replace(dash=style["dash"]) for s in traced]
+    else:
+        traced = [s._replace(color=style["color"]) for s in traced]
+    # hidden lines under the visible ones
+    return pic._replace(strokes=traced + list(pic.strokes))
+
+
+def technical_drawing_image(gb: GBuffer, **options) -> np.ndarray:
+    """:func:`technical_drawing` as a raster image (H, W, 3) float32: its strokes drawn as
+    an SVG viewer draws them (:func:`~sciviz_gbuf.filters.draw_strokes`: the same dashes)
+    over its background (white paper or the shade)."""
+    pic = technical_drawing(gb, **options)
+    w, h = pic.size
+    bg = np.ones((h, w), np.float32) if pic.background is None else pic.background
+    return paint_strokes(pic.strokes, bg)
 
 
 def drawing_picture(gb: GBuffer, **style_options) -> VectorPicture:

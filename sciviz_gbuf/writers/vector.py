@@ -95,6 +95,18 @@ def _check_stroke(s: Stroke) -> tuple[np.ndarray, float]:
     return pts, width
 
 
+def _dash(s: Stroke) -> tuple[float, float] | None:
+    dash = getattr(s, "dash", None)
+    if dash is None:
+        return None
+    if np.ndim(dash) != 1 or len(dash) != 2:
+        raise InputError(
+            f"strokes: dash: expected (on, off) in pixels, got {_validate.brief(dash)}"
+        )
+    on, off = (_validate.size(v, "strokes: dash", "spacing") for v in dash)
+    return on, off
+
+
 def write_svg(
     path: str | os.PathLike,
     strokes: Sequence[Stroke],
@@ -149,8 +161,10 @@ def write_svg(
             coords = " ".join(f"{_num(x + 0.5)},{_num(y + 0.5)}" for x, y in pts)
             tag = "polygon" if s.closed else "polyline"
             level = "" if s.level is None else f' data-level="{float(s.level)!r}"'
+            dash = _dash(s)
+            dash = "" if dash is None else f' stroke-dasharray="{_num(dash[0])} {_num(dash[1])}"'
             parts.append(f'<{tag} points="{coords}" stroke="{_rgb(s.color)}" '
-                         f'stroke-width="{_num(width)}"{level}/>\n')  # fmt: skip
+                         f'stroke-width="{_num(width)}"{level}{dash}/>\n')  # fmt: skip
         parts.append("</g>\n")
     if texts:
         parts.append('<g class="labels" font-family="DejaVu Sans" text-anchor="middle" '
@@ -167,6 +181,40 @@ def write_svg(
         part.path.write_bytes(data)
         part.expected_size = len(data)
     return p
+
+
+def _pdf_figure(w: int, h: int, img, checked, texts):
+    """The matplotlib figure of :func:`write_pdf` (made inside its rc context)."""
+    from matplotlib.backends.backend_pdf import FigureCanvasPdf
+    from matplotlib.collections import LineCollection
+    from matplotlib.figure import Figure
+    from matplotlib.patches import Polygon
+
+    fig = Figure(figsize=(w / 72.0, h / 72.0), dpi=72)
+    FigureCanvasPdf(fig)
+    ax = fig.add_axes((0, 0, 1, 1))
+    ax.set_axis_off()
+    ax.set_xlim(0, w)
+    ax.set_ylim(h, 0)  # row 0 at the top, as the pixels
+    if img is not None:
+        ax.imshow(img, extent=(0, w, h, 0), interpolation="nearest", zorder=0)
+    for s, pts, width in checked:
+        if len(pts) < 2:
+            continue
+        xy = pts + 0.5  # pixel i spans [i, i + 1]
+        style = {"linewidth": width, "capstyle": "butt", "joinstyle": "round", "zorder": 1}
+        dash = _dash(s)
+        if dash is not None:  # in points = pixels (rc lines.scale_dashes off, below)
+            style["linestyle"] = (0, dash)
+        if s.closed:
+            ax.add_patch(Polygon(xy, closed=True, fill=False, edgecolor=tuple(s.color), **style))
+        else:
+            ax.add_collection(LineCollection([xy], colors=[tuple(s.color)], **style))
+    for text, x, y, angle, em, color in texts:
+        ax.text(x + 0.5, y + 0.5, str(text), rotation=angle, rotation_mode="anchor",
+                ha="center", va="center", fontsize=em, family="DejaVu Sans",
+                color=tuple(color), zorder=2)  # fmt: skip
+    return fig
 
 
 def write_pdf(
@@ -187,37 +235,18 @@ def write_pdf(
     img = None if background is None else _check_background(background, w, h)
     checked = [(s, *_check_stroke(s)) for s in strokes]
     import matplotlib
-    from matplotlib.backends.backend_pdf import FigureCanvasPdf
-    from matplotlib.collections import LineCollection
-    from matplotlib.figure import Figure
-    from matplotlib.patches import Polygon
 
-    fig = Figure(figsize=(w / 72.0, h / 72.0), dpi=72)
-    FigureCanvasPdf(fig)
-    ax = fig.add_axes((0, 0, 1, 1))
-    ax.set_axis_off()
-    ax.set_xlim(0, w)
-    ax.set_ylim(h, 0)  # row 0 at the top, as the pixels
-    if img is not None:
-        ax.imshow(img, extent=(0, w, h, 0), interpolation="nearest", zorder=0)
-    for s, pts, width in checked:
-        if len(pts) < 2:
-            continue
-        xy = pts + 0.5  # pixel i spans [i, i + 1]
-        style = {"linewidth": width, "capstyle": "butt", "joinstyle": "round", "zorder": 1}
-        if s.closed:
-            ax.add_patch(Polygon(xy, closed=True, fill=False, edgecolor=tuple(s.color), **style))
-        else:
-            ax.add_collection(LineCollection([xy], colors=[tuple(s.color)], **style))
-    for text, x, y, angle, em, color in texts:
-        ax.text(x + 0.5, y + 0.5, str(text), rotation=angle, rotation_mode="anchor",
-                ha="center", va="center", fontsize=em, family="DejaVu Sans",
-                color=tuple(color), zorder=2)  # fmt: skip
+    # dash lengths in points as given (not scaled by the width), fonts embedded as TrueType
+    with matplotlib.rc_context({"pdf.fonttype": 42, "lines.scale_dashes": False}):
+        fig = _pdf_figure(w, h, img, checked, texts)
     meta = {"Creator": "sciviz-gbuf"}
     if title:
         meta["Title"] = str(title)
     with atomic_output(p) as part:
-        with open(part.path, "wb") as f, matplotlib.rc_context({"pdf.fonttype": 42}):
+        with (
+            open(part.path, "wb") as f,
+            matplotlib.rc_context({"pdf.fonttype": 42, "lines.scale_dashes": False}),
+        ):
             fig.savefig(f, format="pdf", dpi=72, facecolor="white", metadata=meta)
     return p
 

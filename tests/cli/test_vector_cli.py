@@ -166,3 +166,20 @@ def test_bad_vector_requests_fail_in_one_line(tmp_path, stl, args, names):
     r = run_cli([a.format(**fill) for a in args])
     assert_clean_failure(r, names=names, outputs=[out, tmp_path / "e.png", tmp_path / "e.svg"],
                          inputs=before)  # fmt: skip
+
+
+def test_edges_hidden_lines_png_and_svg(tmp_path, stl):
+    png = tmp_path / "part.png"
+    r = run_cli(["edges", stl, "-o", png, "--size", "320x240", "--hidden", "dashed"])
+    assert r.returncode == 0, r.stderr
+    svg = tmp_path / "part.svg"
+    r = run_cli(["edges", stl, "-o", svg, "--size", "320x240", "--hidden", "dashed",
+                 "--layers", "3"])  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    hidden = _groups(svg)["hidden"]
+    assert len(hidden) > 5 and all(e.get("stroke-dasharray") == "6 3" for e in hidden)
+    out = tmp_path / "x.png"
+    for args, name in ((["--layers", "3"], "--layers"), (["--hidden", "dotted"], "--hidden"),
+                       (["--hidden", "thin", "--layers", "9"], "--layers")):  # fmt: skip
+        r = run_cli(["edges", stl, "-o", out, *args])
+        assert_clean_failure(r, names=name, outputs=[out])

@@ -36,9 +36,10 @@ NORMALS = np.dstack([np.zeros((N, N)), np.zeros((N, N)), np.ones((N, N))]).astyp
 
 @pytest.fixture(scope="module")
 def gb():
-    """A tiny supersampled capture with texture coordinates (every style can draw it)."""
+    """A tiny supersampled capture with texture coordinates (every style can draw it) and the
+    surfaces behind (hidden_edges)."""
     torus = pv.ParametricTorus(texture_coordinates=True)
-    return capture(torus, window_size=(12, 10), camera="iso", supersample=2)
+    return capture(torus, window_size=(12, 10), camera="iso", supersample=2, layers=2)
 
 
 def _array_call(entry):
@@ -87,6 +88,24 @@ OTHER_FILTERS = {
     "polylines_to_geojson": (lambda gb, **kw: F.polylines_to_geojson([], **kw), None),
     "vectorize": (lambda gb, **kw: F.vectorize(np.abs(np.sin(FIELD)), **kw), None),
     "edge_strokes": (lambda gb, **kw: F.edge_strokes(gb, **kw), None),
+    "hidden_edges": (lambda gb, **kw: F.hidden_edges(gb, **kw), "gb"),
+    "bridge": (
+        lambda gb, **kw: F.bridge([F.Stroke(np.eye(2), 1.0, "x")] * 2, **({"gap": 3.0} | kw)),
+        None,
+    ),
+    "dash_pieces": (lambda gb, **kw: F.dash_pieces(F.Stroke(np.eye(2), 1.0, "x", **kw)), None),
+    "draw_strokes": (
+        lambda gb, **kw: F.draw_strokes(
+            [F.Stroke(np.eye(2), 1.0, "x")], **({"shape": (N, N)} | kw)
+        ),
+        None,
+    ),
+    "paint_strokes": (
+        lambda gb, **kw: F.paint_strokes(
+            [F.Stroke(np.eye(2), 1.0, "x")], **({"background": np.ones((N, N))} | kw)
+        ),
+        None,
+    ),
     "simplify": (lambda gb, **kw: F.simplify(np.column_stack([_X[0], FIELD[0]]), **kw), None),
 }
 # The parameters of a filter whose options are passed on to another function.
