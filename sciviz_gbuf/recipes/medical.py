@@ -37,12 +37,16 @@ from ._map import rgba
 
 __all__ = [
     "BONE",
+    "SKIN",
+    "SKIN_OPACITY",
+    "TRANSLUCENT_LAYERS",
     "VIEWS",
     "ct_enhance",
     "ct_gbuffer",
     "ct_layers",
     "ct_panels",
     "ct_surface",
+    "ct_translucent",
     "read_ct_volume",
     "view_camera",
 ]
@@ -62,6 +66,12 @@ DEPTH_BANDS = LinearSegmentedColormap.from_list(
 CT_CONTOUR_COLOR = (0.22, 0.11, 0.04)
 #: Colour of bone in the conventional shaded image.
 BONE = (0.93, 0.87, 0.76)
+#: Colour and opacity of a translucent skin (:func:`ct_translucent`).
+SKIN = (0.92, 0.56, 0.46)
+SKIN_OPACITY = 0.35
+#: Layers a translucent figure keeps: the skin's front, the bone's front and back, the
+#: skin's back (and one more for folds).
+TRANSLUCENT_LAYERS = 5
 #: Anatomical views: direction from the patient towards the eye, and the view-up, in LPS.
 VIEWS: dict[str, tuple[tuple[float, float, float], tuple[float, float, float]]] = {
     "anterior": ((0.0, -1.0, 0.0), (0.0, 0.0, 1.0)),
@@ -256,6 +266,90 @@ def ct_gbuffer(
     )
 
 
+def ct_translucent(
+    source,
+    *,
+    translucent: str | float | pv.PolyData = "skin",
+    inner: str | float | pv.PolyData = "bone",
+    opacity: float = SKIN_OPACITY,
+    view: str | Sequence[float] = "anterior",
+    camera=None,
+    window_size: Sequence[int] = (1024, 1024),
+    supersample: int = 2,
+    view_angle: float = 20.0,
+    layers: int = TRANSLUCENT_LAYERS,
+    colors: tuple[Sequence[float], Sequence[float]] = (SKIN, BONE),
+    profile_width: float = 1.5,
+    background: Sequence[float] | None = None,
+    progress_bar: bool = False,
+    up: str | None = None,
+    **surface_options,
+) -> np.ndarray:
+    """A translucent outer surface (the skin) with an inner one (the bone) seen through it:
+    both surfaces shaded and outlined by their own profiles, the outer one with ``opacity``
+    (:func:`~sciviz_gbuf.compose.layered` of a multi-layer G-buffer; the "extended"
+    G-buffer 1990 §5.1 names as the way to transparency).
+
+    Parameters
+    ----------
+    source : DICOM folder, file list, volume or None
+        The CT (:func:`read_ct_volume`); None when both surfaces are given as meshes.
+    translucent, inner : float, {"skin", "bone"} or pyvista.PolyData
+        The two isosurfaces (thresholds in HU for the presets, or the value of a volume's
+        scalars), or the surfaces themselves (e.g. two labels of a segmentation).
+    opacity : float in [0, 1], default: 0.35
+        Of the translucent surface; the inner one is opaque.
+    view, camera, window_size, supersample, view_angle, up
+        As :func:`ct_gbuffer`; the view is framed on the translucent surface.
+    layers : int in [2, 8], default: 5
+        Surfaces kept along each ray (``capture(layers=...)``).
+    colors : (RGB, RGB), default: (:data:`SKIN`, :data:`BONE`)
+    profile_width : float, default: 1.5
+    background : RGB, optional
+        Opaque background; default transparent.
+    **surface_options
+        :func:`ct_surface` options (``smooth``, ``refine``, ``largest``, ...).
+
+    Returns
+    -------
+    (H, W, 4) uint8 RGBA.
+    """
+    from ..compose import layered
+    from ..writers.png import to_uint8
+
+    w, h, _ = check_capture_size(window_size, supersample)
+    volume = None
+    surfaces = []
+    for name, spec in (("translucent", translucent), ("inner", inner)):
+        if isinstance(spec, pv.PolyData):
+            surfaces.append(spec)
+            continue
+        if volume is None:
+            if source is None:
+                raise InputError(f"{name}: a threshold needs a CT source (or give a surface)")
+            volume = source if isinstance(source, pv.DataSet) else read_ct_volume(
+                source, progress_bar=progress_bar)  # fmt: skip
+        surfaces.append(ct_surface(volume, iso=spec, progress_bar=progress_bar, **surface_options))
+    outer = surfaces[0]
+    if camera is None:
+        position, focal, view_up = view_camera(
+            outer.points, view, view_angle=view_angle, aspect=w / max(h, 1), up=up
+        )
+        camera = pv.Camera()
+        camera.position, camera.focal_point, camera.up = position, focal, view_up
+        camera.view_angle = view_angle
+    if _validate.count(layers, "layers", "layers") < 2:
+        raise InputError(f"layers: expected at least 2 to see through a surface, got {layers!r}")
+    gb = capture(surfaces, window_size=(w, h), camera=camera, supersample=supersample,
+                 progress_bar=progress_bar, layers=layers)  # fmt: skip
+    alpha = _validate.unit_interval(opacity, "opacity")
+    if np.ndim(colors) != 2 or len(colors) != 2:
+        raise InputError(f"colors: expected two RGB colours, got {_validate.brief(colors)}")
+    rgba = layered(gb, opacity=(alpha, 1.0), colors=tuple(colors),
+                   profile_width=profile_width, background=background)  # fmt: skip
+    return to_uint8(rgba)
+
+
 def _axis(axis: str | None, default: int, name: str) -> int:
     if axis is None:
         return default
@@ -447,6 +541,9 @@ def ct_enhance(
     smooth: int = 60,
     refine: bool = True,
     progress_bar: bool = False,
+    translucent: str | float | pv.PolyData | None = None,
+    inner: str | float | pv.PolyData = "bone",
+    opacity: float = SKIN_OPACITY,
 ) -> np.ndarray:
     """The enhanced CT image of Saito & Takahashi 1990 Fig. 14 (b), beside the conventional (a).
 
@@ -474,11 +571,26 @@ def ct_enhance(
         Reading and surface options (:func:`ct_surface`): ``refine=False, smooth=0`` draws the
         raw marching-cubes surface, slice terraces and all.
     progress_bar : bool, default: False
+    translucent, inner, opacity
+        With ``translucent`` (e.g. ``"skin"``): the translucent-skin view instead,
+        :func:`ct_translucent` of ``source`` (``inner`` seen through ``translucent`` at
+        ``opacity``; one picture, ``layout`` and the Fig. 14 options do not apply).
 
     Returns
     -------
     (H, W, 4) uint8 RGBA; for ``"pair"`` W is twice the window width plus a gap of 1/32 of it.
     """
+    if translucent is not None:
+        if isinstance(source, GBuffer):
+            raise InputError(
+                "source: a translucent view captures its two surfaces itself: give the CT "
+                "(or the surfaces), not a G-buffer"
+            )
+        return ct_translucent(
+            source, translucent=translucent, inner=inner, opacity=opacity, view=view,
+            window_size=window_size, supersample=supersample, profile_width=profile_width,
+            background=background, progress_bar=progress_bar, smooth=smooth, refine=refine,
+        )  # fmt: skip
     if layout not in LAYOUTS:
         raise InputError(f"layout: expected one of {LAYOUTS}, got {layout!r}")
     layer_options = {
