@@ -30,7 +30,13 @@ from .._atomic import atomic_output
 from ..compose import colorize, ids_to_rgb, montage, normals_to_rgb, with_colorbar, write_png
 from ..core.capture import capture, check_window_size
 from ..core.gbuffer import GBuffer
-from ..datasets import load_frog_skeleton, load_jacksboro_dem, load_jacksboro_terrain, load_nut
+from ..datasets import (
+    load_frog_body,
+    load_frog_skeleton,
+    load_jacksboro_dem,
+    load_jacksboro_terrain,
+    load_nut,
+)
 from ..errors import InputError, OutputError
 from ..filters import lambert, profile_edges, suppress_zeroth_order
 from ..recipes import CAPTIONS as EDGE_CAPTIONS
@@ -40,6 +46,8 @@ from ..recipes import (
     birdseye_panels,
     ct_gbuffer,
     ct_panels,
+    ct_surface,
+    ct_translucent,
     fig3_panels,
     fig5_panels,
     fig6_panels,
@@ -51,6 +59,7 @@ from ..recipes import (
     sumi_e,
     surface_analysis,
     surface_gbuffer,
+    technical_drawing_image,
     terrain_birdseye_camera,
     topographic_map,
     write_panels,
@@ -234,6 +243,30 @@ class _Figure:
     gbuffer: GBuffer | None = None
 
 
+LINEART_CAPTIONS = {
+    "dashed": "technical drawing (sciviz_gbuf.recipes.technical_drawing): visible profiles and "
+    "creases solid, the edges of the surfaces behind (capture(layers=4), hidden_edges) dashed; "
+    "the same strokes `sciviz-gbuf edges nut.ply --hidden dashed -o nut.svg` writes as SVG",
+    "thin": "the same with hidden lines thin and grey",
+    "shaded": "visible edges as vector strokes (edge_strokes) over the Lambert shade: what "
+    "`sciviz-gbuf edges ... --background shade -o out.pdf` writes",
+}
+
+
+def lineart_panels(window_size: tuple[int, int]) -> list[Panel]:
+    """The nut as line art from a multi-layer G-buffer: hidden lines dashed and thin, and the
+    visible edges as strokes over the shade (drawn as an SVG viewer draws them)."""
+    nut = load_nut()
+    gb = capture(nut, window_size=window_size, supersample=2, layers=4,
+                 camera=nut_camera(nut.bounds, aspect=window_size[0] / window_size[1]))  # fmt: skip
+    return [
+        ("dashed", "hidden lines dashed", technical_drawing_image(gb, hidden="dashed")),
+        ("thin", "hidden lines thin", technical_drawing_image(gb, hidden="thin")),
+        ("shaded", "vector edges over the shade",
+         technical_drawing_image(gb, hidden=None, background="shade")),
+    ]  # fmt: skip
+
+
 def _edge_figures() -> list[_Figure]:
     return [
         _Figure(
@@ -258,6 +291,23 @@ def _edge_figures() -> list[_Figure]:
             "edge filters",
             supersample=3,
         ),
+    ]
+
+
+def _lineart_figures(window_size: tuple[int, int]) -> list[_Figure]:
+    return [
+        _Figure(
+            "lineart",
+            "Line art and hidden lines: vector strokes from G-buffers",
+            "The nut captured with the three surfaces behind the visible one along every ray "
+            "(capture(layers=4): the extended G-buffer of 1990 §5.1), its visible and hidden "
+            "profiles and creases traced into strokes (vectorize) and drawn dashed, thin or "
+            "over the shade. The SVG and PDF of the edges, mesh, patches and topo commands "
+            "hold these strokes as vector paths.",
+            partial(lineart_panels, window_size),
+            LINEART_CAPTIONS,
+            "capture of 4 layers, tracing and drawing",
+        )
     ]
 
 
@@ -364,6 +414,9 @@ MEDICAL_CAPTIONS = {
     "the bone",
     "sh": "(sh) Lambert shade from the captured normals",
     "bands": "colour bands of wz, shaded",
+    "translucent": "translucent skin (sciviz_gbuf.ct_translucent): the frog's body envelope at "
+    "opacity 0.35 over its skeleton, both outlined: a multi-layer G-buffer (capture(layers=5)) "
+    "composed front to back (compose.layered)",
 }
 #: The frog is seen from above its back, obliquely, head to the right.
 FROG_VIEW = (0.0, -0.7, 1.0)
@@ -378,7 +431,12 @@ def medical_panels(window_size: tuple[int, int]) -> list[Panel]:
     titles = {"shaded": "(a) conventional shaded", "enhanced": "(b) enhanced (Fig. 14)"}
     titles |= {"pr": "(pr) profiles", "cn": "(cn) contours of wx", "sh": "(sh) shade"}
     titles |= {"bands": "colour bands of wz"}
-    return [(k, titles[k], panels[k]) for k in titles]
+    out = [(k, titles[k], panels[k]) for k in titles]
+    skin = ct_surface(load_frog_body(), iso=0.5, scalars="body")
+    bone = ct_surface(load_frog_skeleton(), iso=0.5)
+    translucent = ct_translucent(None, translucent=skin, inner=bone, view=FROG_VIEW,
+                                 window_size=window_size, background=(1.0, 1.0, 1.0))  # fmt: skip
+    return [*out, ("translucent", "translucent skin over the skeleton", translucent)]
 
 
 def _medical_figures(window_size: tuple[int, int]) -> list[_Figure]:
@@ -691,6 +749,7 @@ def _steps(width: int, height: int) -> list[tuple[str, Callable, object]]:
     groups = [
         _contour_figures(max(16, min(width, height, CONTOUR_SIZE))),
         _edge_figures(),
+        _lineart_figures(size),
         _medical_figures(size),
         _surface_figures(size),
         _terrain_figures(size),

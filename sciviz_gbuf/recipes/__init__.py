@@ -27,7 +27,15 @@ from ..styles.illustration import STYLES, fig7_edge_map, illustrate, shade_image
 from .birdseye import birdseye_gbuffer, birdseye_layers, birdseye_map, birdseye_panels, sumi_e
 from .contour_figures import CONTOUR_CAPTIONS, fig5_panels, fig6_panels, fig11_panels, write_panels
 from .labels import ContourLabel, contour_labels, labels_to_geojson
-from .medical import ct_enhance, ct_gbuffer, ct_layers, ct_panels, ct_surface, view_camera
+from .medical import (
+    ct_enhance,
+    ct_gbuffer,
+    ct_layers,
+    ct_panels,
+    ct_surface,
+    ct_translucent,
+    view_camera,
+)
 from .saito1990 import CAPTIONS, fig3_panels, fig7_panels, nut_camera
 from .surface import seam_patches, surface_analysis, surface_gbuffer, surface_layers
 from .terrain import map_grid, nice_intervals, topographic_map
@@ -58,6 +66,7 @@ __all__ = [
     "ct_layers",
     "ct_panels",
     "ct_surface",
+    "ct_translucent",
     "drawing_picture",
     "edge_picture",
     "fig3_panels",

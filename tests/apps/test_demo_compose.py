@@ -288,10 +288,11 @@ def test_run_demo_files(demo):
     # Fig. 3 (7 panels + montage) and Fig. 7 (8 panels + montage); then the contour figures:
     # Fig. 5 (5 panels + montage), Fig. 6 (3 + montage) and Fig. 11 (7 + montage); then the
     # terrain figure: topographic map, Fig. 12 cn, pr, sh, mx2, mx4, Fig. 13 sumi-e + montage;
-    # the medical figure: Fig. 14 (a), (b), pr, cn, sh, bands + montage; the surface analysis
-    # figure: Fig. 15 contours, reflection lines C1/C2, zebra C1/C2, curvature C1/C2, isophotes
-    # and the NPR figure: 8 styles + montage
-    assert len(pngs) == 2 * 11 + 1 + 8 + 9 + 6 + 4 + 8 + 9 + 7 + 9 + 9
+    # the line-art figure: hidden lines dashed, thin, edges over the shade + montage; the
+    # medical figure: Fig. 14 (a), (b), pr, cn, sh, bands, translucent skin + montage; the
+    # surface analysis figure: Fig. 15 contours, reflection lines C1/C2, zebra C1/C2,
+    # curvature C1/C2, isophotes and the NPR figure: 8 styles + montage
+    assert len(pngs) == 2 * 11 + 1 + 8 + 9 + 6 + 4 + 8 + 9 + 4 + 8 + 9 + 9
     for p in files:
         assert p.is_file() and p.stat().st_size > 0
     contour_figures = ("fig5_", "fig6_", "fig11_")
@@ -329,6 +330,33 @@ def test_run_demo_medical_figure(demo):
     assert np.mean(bone == (enhanced[..., :3].min(axis=2) < 250)) > 0.97
 
 
+def test_run_demo_translucent_and_hidden_line_figures(demo):
+    """The translucent frog shows the skin's tint over the bone (the envelope covers it all)
+    and the skin alone over paper; the nut's technical drawing
+    has dashed ink (runs of ink and paper along its hidden lines) besides solid lines."""
+    from sciviz_gbuf.recipes.medical import BONE, SKIN
+
+    outdir, _ = demo
+    rgb = np.asarray(Image.open(outdir / "fig14_translucent.png"))[..., :3] / 255.0
+    drawn = rgb.min(axis=2) < 0.98
+    assert 0.1 < drawn.mean() < 0.8
+    hue = rgb[drawn] / np.maximum(rgb[drawn].max(axis=1, keepdims=True), 1e-6)
+    skin = np.asarray(SKIN) / max(SKIN)
+    bone = np.asarray(BONE) / max(BONE)
+    # the skin's tint over the bone lies between the two hues; over paper it is a pale skin
+    tinted = np.linalg.norm(hue - (0.35 * skin + 0.65 * bone), axis=1) < 0.06
+    pale = 0.35 * skin * max(SKIN) * 0.8 + 0.65  # lit skin film over white
+    film = np.linalg.norm(rgb[drawn] - pale, axis=1) < 0.08
+    assert tinted.mean() > 0.02 and film.mean() > 0.02, (tinted.mean(), film.mean())
+    dashed = np.asarray(Image.open(outdir / "lineart_dashed.png").convert("L")) / 255.0
+    thin = np.asarray(Image.open(outdir / "lineart_thin.png").convert("L")) / 255.0
+    ink = dashed < 0.5
+    assert 0.005 < ink.mean() < 0.2
+    # thin grey hidden lines: mid-grey pixels the dashed drawing lacks
+    grey = (thin > 0.35) & (thin < 0.8)
+    assert grey.sum() > 200
+
+
 def test_run_demo_terrain_view(demo):
     outdir, _ = demo
     g = GBuffer.load(outdir / "terrain_gbuffer.npz")
@@ -360,8 +388,8 @@ def test_run_demo_edge_figures(demo):
         assert f"fig7_{key}.png" in names
     page = (outdir / "index.html").read_text(encoding="utf-8")
     assert "Fig. 3" in page and "Fig. 7" in page
-    # scenes; edge, contour, terrain, medical, surface and NPR figures
-    assert page.count("Timings:") == 2 + 2 + 3 + 1 + 1 + 1 + 1
+    # scenes; edge, line-art, contour, terrain, medical, surface and NPR figures
+    assert page.count("Timings:") == 2 + 2 + 1 + 3 + 1 + 1 + 1 + 1
 
     def grey(name):
         with Image.open(outdir / name) as im:
