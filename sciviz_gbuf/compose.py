@@ -406,12 +406,14 @@ def layered(
     """Surfaces and the ones behind them, composed with opacity: a translucent picture from a
     multi-layer G-buffer (``capture(..., layers=k)``; 1990 §5.1's extended G-buffer).
 
-    Along each pixel's ray the surfaces are taken front to back down to the first opaque one
-    (``opacity`` 1), a translucent object's first surface only (a translucent skin is one
-    film: its far side does not dim what lies inside twice). Each is shaded (Lambert,
+    Each object's first surface along each ray is gathered from the layers (a translucent
+    skin is one film: its far side does not dim what lies inside twice), and along each ray
+    these are taken front to back down to the first opaque one (``opacity`` 1). Each is
+    shaded (Lambert,
     ``ambient + (1 - ambient) max(0, N.L)``, times its object's colour) and outlined by its
-    own profile and crease lines (:func:`~sciviz_gbuf.filters.profile_and_crease_edges`),
-    and they are laid over each other from the deepest to the front, each surface with its
+    own profile and crease lines (:func:`~sciviz_gbuf.filters.profile_and_crease_edges` of
+    that object's surface alone: no line where two objects meet at one depth), and they are
+    laid over each other from the deepest to the front, each surface with its
     object's ``opacity`` and its lines at full ink: a line behind a translucent surface shows
     through it attenuated as the surface's colour is, and lines of different layers cross
     correctly.
@@ -449,44 +451,74 @@ def layered(
     rgb_of = np.asarray(rgbs, np.float32).reshape(n_obj, 3)
     from scipy import ndimage
 
+    from .core.gbuffer import GBuffer
+
     h, w = gb.output_shape
     stack = [gb, *gb.layers]
-    # What each pixel shows: a translucent object's first surface only (a skin is one film,
-    # its far side is not seen again), every layer down to the first opaque one.
-    include = []
-    stopped = np.zeros(gb.shape, bool)
-    had = np.zeros((n_obj, *gb.shape), bool)
-    for layer in stack:
-        ids = np.where(layer.mask, layer.object_id, 0).clip(0, n_obj - 1)
-        first = ~np.take_along_axis(had, ids[None], axis=0)[0]
-        inc = layer.mask & ~stopped & first
-        include.append(inc)
-        for o in np.unique(ids[inc]):
-            had[o] |= inc & (ids == o)
-        stopped |= inc & (alpha_of[ids] >= 1.0)
+    # Each object's own first surface along every ray, gathered from the layers: what it
+    # shows were it alone (a translucent skin is one film, its far side is not seen again;
+    # a bone behind it is seen whole). Its lines are found on it alone, so where two objects
+    # meet at nearly one depth (a thin skin on a skull) no line is drawn between them.
+    ids = [np.where(layer.mask, layer.object_id, -1) for layer in stack]
+    present = sorted({int(o) for i in ids for o in np.unique(i) if o >= 0})
+    surfaces = {}
+    for o in present:
+        pick = np.full(gb.shape, -1, np.int64)
+        for k in range(len(stack) - 1, -1, -1):
+            pick[ids[k] == o] = k
+        found = pick >= 0
+        k_safe = np.where(found, pick, 0)
+
+        def gather(name: str, k_safe=k_safe, found=found):
+            arrs = np.stack([getattr(layer, name) for layer in stack])
+            out = np.take_along_axis(arrs, k_safe[None, ..., None] if arrs.ndim == 4
+                                     else k_safe[None], axis=0)[0]  # fmt: skip
+            return out
+
+        depth = np.where(found, gather("depth"), np.float32(np.nan)).astype(np.float32)
+        surfaces[o] = GBuffer(
+            depth=depth, sz=np.where(found, gather("sz"), np.float32(np.nan)),
+            normal=np.where(found[..., None], gather("normal"), np.float32(np.nan)),
+            world=np.where(found[..., None], gather("world"), np.float32(np.nan)),
+            object_id=np.where(found, o, -1).astype(np.int32),
+            cell_id=np.where(found, gather("cell_id"), -1).astype(np.int64),
+            mask=found, camera=gb.camera, supersample=gb.supersample,
+            object_names=list(gb.object_names),
+        )  # fmt: skip
+    # per pixel, the objects front to back down to the first opaque one
+    depths = np.stack([np.where(surfaces[o].mask, surfaces[o].depth, np.inf) for o in present])
+    order = np.argsort(depths, axis=0, kind="stable")
+    rank = np.empty_like(order)
+    np.put_along_axis(rank, order, np.arange(len(present))[:, None, None], axis=0)
+    opaque_depth = np.full(gb.shape, np.inf)
+    for i, o in enumerate(present):
+        if alpha_of[o] >= 1.0:
+            opaque_depth = np.minimum(opaque_depth, depths[i])
     img = np.zeros((h, w, 3), np.float32)
     cover = np.zeros((h, w), np.float32)
-    for layer, inc in zip(reversed(stack), reversed(include), strict=True):
-        if not inc.any():
-            continue
-        ids = np.where(layer.mask, layer.object_id, 0).clip(0, n_obj - 1)
-        shade = amb + (1.0 - amb) * np.nan_to_num(
-            lambert(layer.normal, light=light, mask=layer.mask)
-        )
-        colour = rgb_of[ids] * shade[..., None]
-        a = alpha_of[ids] * inc
-        # averaged down with their coverage: antialiased edges and partial pixels
-        a_out = layer.downsample(a.astype(np.float32))
-        c_out = layer.downsample((colour * a[..., None]).astype(np.float32))
-        img = c_out + (1.0 - a_out[..., None]) * img
-        cover = a_out + (1.0 - a_out) * cover
-        # the layer's lines where it is shown (and a pixel beyond: a profile lies on the
-        # nearer side of its step)
-        prof, crease = profile_and_crease_edges(layer, width=width, signed=False)
-        shown = ndimage.grey_dilation(layer.downsample(inc.astype(np.float32)), size=3)
-        ink = (np.maximum(prof, crease) * shown)[..., None]
-        img = ink * ink_rgb + (1.0 - ink) * img
-        cover = ink[..., 0] + (1.0 - ink[..., 0]) * cover
+    for r in range(len(present) - 1, -1, -1):
+        for i, o in enumerate(present):
+            surf = surfaces[o]
+            inc = surf.mask & (rank[i] == r) & (depths[i] <= opaque_depth)
+            if not inc.any():
+                continue
+            shade = amb + (1.0 - amb) * np.nan_to_num(
+                lambert(surf.normal, light=light, mask=surf.mask)
+            )
+            a = alpha_of[o] * inc
+            a_out = surf.downsample(a.astype(np.float32))
+            c_out = surf.downsample(
+                (rgb_of[o] * shade[..., None] * a[..., None]).astype(np.float32)
+            )
+            img = c_out + (1.0 - a_out[..., None]) * img
+            cover = a_out + (1.0 - a_out) * cover
+            # its lines where it is shown (and a pixel beyond: a profile lies on the nearer
+            # side of its step)
+            prof, crease = profile_and_crease_edges(surf, width=width, signed=False)
+            shown = ndimage.grey_dilation(surf.downsample(inc.astype(np.float32)), size=3)
+            ink = (np.maximum(prof, crease) * shown)[..., None]
+            img = ink * ink_rgb + (1.0 - ink) * img
+            cover = ink[..., 0] + (1.0 - ink[..., 0]) * cover
     out = np.empty((h, w, 4), np.float32)
     # premultiplied -> straight colour where something is drawn
     safe = np.where(cover > 0, cover, 1.0)[..., None]

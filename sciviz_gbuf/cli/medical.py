@@ -6,8 +6,17 @@ import argparse
 import time
 
 from ..compose import write_png
+from ..errors import InputError
 from ..readers.dicom import dicom_report
-from ..recipes.medical import LAYOUTS, VIEWS, ct_enhance, ct_gbuffer, read_ct_volume
+from ..recipes.medical import (
+    LAYOUTS,
+    SKIN_OPACITY,
+    VIEWS,
+    ct_enhance,
+    ct_gbuffer,
+    ct_translucent,
+    read_ct_volume,
+)
 from ._args import add_progress, number, png_output, positive_int, show_progress, size
 
 __all__ = ["add_ct"]
@@ -70,6 +79,24 @@ def _cmd_ct(args: argparse.Namespace) -> int:
     else:  # a volume file
         report = {"n_slices": volume.dimensions[2], "geometry": "volume file"}
     t1 = time.perf_counter()
+    if args.translucent is not None:
+        if args.save_gbuffer:
+            raise InputError(
+                "--save-gbuffer: a translucent view keeps no single-surface G-buffer; save one "
+                "without --translucent"
+            )
+        image = ct_translucent(
+            volume, translucent=args.translucent, inner=args.iso, opacity=args.opacity,
+            view=args.view, window_size=args.size, supersample=args.supersample,
+            background=args.background, progress_bar=show, up=args.up, smooth=args.smooth,
+            refine=args.refine, largest=args.largest,
+        )  # fmt: skip
+        write_png(out, image)
+        print(
+            f"wrote {out} ({image.shape[1]}x{image.shape[0]}, {args.iso} through translucent "
+            f"{args.translucent} at opacity {args.opacity:g}) in {time.perf_counter() - t0:.1f} s"
+        )
+        return 0
     gb = ct_gbuffer(
         volume,
         iso=args.iso,
@@ -180,6 +207,20 @@ def add_ct(sub) -> None:
     )
     p.add_argument(
         "--save-gbuffer", default=None, metavar="FILE.npz", help="also save the G-buffers"
+    )
+    p.add_argument(
+        "--translucent",
+        type=_iso,
+        default=None,
+        metavar="ISO",
+        help="draw this surface (HU, or skin / bone) translucent over the --iso one, both "
+        "outlined, instead of the Fig. 14 pair (e.g. --translucent skin --iso bone)",
+    )
+    p.add_argument(
+        "--opacity",
+        type=number(lambda v: 0 <= v <= 1, "an opacity in [0, 1]"),
+        default=SKIN_OPACITY,
+        help=f"of the --translucent surface (default {SKIN_OPACITY:g})",
     )
     add_progress(p)
     p.set_defaults(func=_cmd_ct)

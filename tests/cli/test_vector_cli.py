@@ -183,3 +183,20 @@ def test_edges_hidden_lines_png_and_svg(tmp_path, stl):
                        (["--hidden", "thin", "--layers", "9"], "--layers")):  # fmt: skip
         r = run_cli(["edges", stl, "-o", out, *args])
         assert_clean_failure(r, names=name, outputs=[out])
+
+
+def test_ct_translucent_skin(tmp_path, shared_data):
+    out = tmp_path / "ct.png"
+    src = shared_data / "ct" / "dcm_qa_ct_Philips_phantom_5mm"
+    before = checksums([src])
+    r = run_cli(["ct", src, "-o", out, "--translucent", "skin", "--iso", "bone",
+                 "--size", "200x200", "--background", "white"])  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert "translucent skin" in r.stdout and out.is_file()
+    assert checksums([src]) == before
+    bad = tmp_path / "bad.png"
+    r = run_cli(["ct", src, "-o", bad, "--translucent", "skin", "--opacity", "1.5"])
+    assert_clean_failure(r, names="--opacity", outputs=[bad])
+    r = run_cli(["ct", src, "-o", bad, "--translucent", "skin", "--save-gbuffer",
+                 tmp_path / "g.npz"])  # fmt: skip
+    assert_clean_failure(r, names="--save-gbuffer", outputs=[bad, tmp_path / "g.npz"])

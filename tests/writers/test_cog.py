@@ -206,7 +206,7 @@ def test_cli_topo_chunks_matches_in_memory(dem_tif, tmp_path, capsys):
     ("argv", "message"),
     [
         (["-o", "{tmp}/m.png", "--chunks", "64"], "expected a .tif"),
-        (["-o", "{tmp}/m.jpg"], "ending in .png or .tif"),
+        (["-o", "{tmp}/m.jpg"], "ending in .png, .tif, .svg or .pdf"),
         (["-o", "{tmp}/m.png", "--overview", "{tmp}/o.png"], "--overview"),
         (["-o", "{tmp}/m.tif", "--dask", "tcp://x:1", "--workers", "3"], "--workers"),
     ],
