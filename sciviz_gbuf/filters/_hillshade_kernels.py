@@ -1,4 +1,21 @@
-"""Numba kernels of :mod:`sciviz_gbuf.filters.hillshade` (GDAL gdaldem_lib.cpp formulas)."""
+"""Numba kernels of :mod:`sciviz_gbuf.filters.hillshade` (GDAL gdaldem_lib.cpp formulas).
+
+Two statements of one method:
+
+- :func:`_pixel` is GDAL's per-cell computation, in float64, with the ``-compute_edges``
+  window (extrapolated borders, the centre value for a nodata neighbour). It is the reference
+  (:func:`hillshade_reference_kernel`, every cell through it) and the fast kernel's answer for
+  the cells it does not take: the first and last row and column, and every cell whose 3 x 3
+  window holds nodata.
+- :func:`_hillshade_rows` takes each inner row in one branch-free float32 loop (the 3 x 3
+  gradient as weighted differences, the variant's shade formula with selects instead of
+  branches; ``atan``/``acos`` by Cephes' float32 polynomial), which LLVM vectorises: about
+  20 x the per-cell loop. A nodata cell in the window makes the cell's float32 value NaN
+  (NaN propagates; a nodata centre is folded in as ``+ (c - c)``), and such cells are done
+  again by :func:`_pixel`. The two agree to float32 rounding (a few 1e-7 of the shade's
+  range): GDAL's Byte output, ``round(1 + 254 shade)``, differs only where the float64
+  value lies within that of a rounding boundary.
+"""
 
 from __future__ import annotations
 
@@ -8,6 +25,8 @@ import numpy as np
 from numba import njit
 
 from ..core.bands import run_bands
+
+__all__ = ["fill_ring_kernel", "hillshade_kernel", "hillshade_reference_kernel"]
 
 _INV_SQUARE_OF_HALF_PI = 1.0 / ((math.pi * math.pi) / 4.0)
 
@@ -84,6 +103,75 @@ def _difference_between_angles(a1: float, a2: float) -> float:
     return diff
 
 
+@njit(cache=True, error_model="numpy")
+def _pixel(
+    z: np.ndarray, i: int, j: int, inv_ew: float, inv_ns: float, z_factor: float,
+    azimuth: float, altitude: float, algorithm: int, variant: int,
+) -> float:  # fmt: skip
+    """GDAL's shade of cell (i, j), in float64 (NaN at a nodata cell), unclamped."""
+    if np.isnan(z[i, j]):
+        return np.nan
+    zf = z_factor / (2.0 if algorithm == 1 else 8.0)
+    sin_alt = math.sin(math.radians(altitude))
+    cos_alt_z = math.cos(math.radians(altitude)) * zf
+    az = math.radians(azimuth)
+    w0, w1, w2, w3, _, w5, w6, w7, w8 = _window(z, i, j)
+    if algorithm == 0:  # Horn (1981)
+        gx = np.float64((w0 + w3 + w3 + w6) - (w2 + w5 + w5 + w8))
+        gy = np.float64((w6 + w7 + w7 + w8) - (w0 + w1 + w1 + w2))
+    else:  # Zevenbergen & Thorne (1987)
+        gx = np.float64(w3 - w5)
+        gy = np.float64(w7 - w1)
+    x = gx * inv_ew
+    y = gy * inv_ns
+    xx_plus_yy = x * x + y * y
+    if variant == 3:  # -igor
+        slope_strength = math.degrees(math.atan(math.sqrt(xx_plus_yy) * zf)) / 90.0
+        aspect = math.atan2(gy, gx)  # GDAL: atan2(dy, -dx) with dx = -gx, no resolution
+        diff = _difference_between_angles(aspect, 1.5 * math.pi - az)
+        return 1.0 - slope_strength * (1.0 - diff / math.pi)
+    if variant == 2:  # -multidirectional (Mark 1992)
+        if xx_plus_yy == 0.0:
+            return sin_alt
+        diag_c = math.cos(math.radians(225.0)) * cos_alt_z
+        v225 = max(sin_alt + (x - y) * diag_c, 0.0)
+        v270 = max(sin_alt - x * cos_alt_z, 0.0)
+        v315 = max(sin_alt + (x + y) * diag_c, 0.0)
+        v360 = max(sin_alt - y * cos_alt_z, 0.0)
+        w225 = 0.5 * xx_plus_yy - x * y
+        w315 = xx_plus_yy - w225
+        num = w225 * v225 + x * x * v270 + w315 * v315 + y * y * v360
+        return 0.5 * num / xx_plus_yy / math.sqrt(1.0 + zf * zf * xx_plus_yy)
+    slope = zf * zf * xx_plus_yy
+    cang = (sin_alt - (y * math.cos(az) - x * math.sin(az)) * cos_alt_z) / math.sqrt(1.0 + slope)
+    if variant == 1:  # -combined
+        ang = math.acos(min(max(cang, -1.0), 1.0))
+        return 1.0 - ang * math.atan(math.sqrt(slope)) * _INV_SQUARE_OF_HALF_PI
+    return cang
+
+
+def hillshade_reference_kernel(
+    z: np.ndarray, inv_ew: float, inv_ns: float, z_factor: float, azimuth: float,
+    altitude: float, algorithm: int, variant: int,
+) -> np.ndarray:  # fmt: skip
+    """Every cell by :func:`_pixel`: the plain statement the fast kernel is tested against."""
+    h, w = z.shape
+    out = np.full((h, w), np.nan, dtype=np.float32)
+    if h >= 2 and w >= 2:
+        run_bands(_reference_rows, h, z, inv_ew, inv_ns, z_factor, azimuth, altitude,
+                  algorithm, variant, out)  # fmt: skip
+    return out
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _reference_rows(i0, i1, z, inv_ew, inv_ns, z_factor, azimuth, altitude, algorithm,
+                    variant, out) -> None:  # fmt: skip
+    for i in range(i0, i1):
+        for j in range(z.shape[1]):
+            s = _pixel(z, i, j, inv_ew, inv_ns, z_factor, azimuth, altitude, algorithm, variant)
+            out[i, j] = min(max(s, 0.0), 1.0) if not np.isnan(s) else np.nan
+
+
 def hillshade_kernel(
     z: np.ndarray,
     inv_ew: float,
@@ -93,11 +181,16 @@ def hillshade_kernel(
     altitude: float,
     algorithm: int,
     variant: int,
+    out: np.ndarray | None = None,
 ) -> np.ndarray:
+    """The shade of every cell of ``z`` (C-contiguous float32, NaN nodata) into ``out`` (a new
+    array if None; C-contiguous float32 of ``z``'s shape, not overlapping it), returned."""
     h, w = z.shape
-    out = np.full((h, w), np.nan, dtype=np.float32)
+    if out is None:
+        out = np.empty((h, w), dtype=np.float32)
     if h < 2 or w < 2:
-        return out  # GDAL writes nodata everywhere: there is no 3x3 neighbourhood to extrapolate
+        out.fill(np.nan)  # GDAL writes nodata everywhere: no 3x3 neighbourhood to extrapolate
+        return out
     run_bands(
         _hillshade_rows, h, z, inv_ew, inv_ns, z_factor, azimuth, altitude, algorithm, variant,
         out,
@@ -105,8 +198,47 @@ def hillshade_kernel(
     return out
 
 
-# error_model="numpy" in the band kernels, as numba compiled the prange loop bodies they
-# replace: a division by zero gives inf / NaN, it does not raise.
+# Cephes' atanf (single precision, relative error ~1e-7), branch-free: the range reduction
+# by selects, so that the loops calling it vectorise.
+_T3P8 = 2.414213562373095  # tan(3 pi / 8)
+_TP8 = 0.4142135623730950  # tan(pi / 8)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _atan_pos(t: np.float32) -> np.float32:
+    """atan(t) for t >= 0 (inf included), float32."""
+    big = t > np.float32(_T3P8)
+    mid = t > np.float32(_TP8)
+    base = np.float32(math.pi / 2) if big else (np.float32(math.pi / 4) if mid else np.float32(0))
+    reduced = (t - np.float32(1)) / (t + np.float32(1)) if mid else t
+    x = np.float32(-1.0) / t if big else reduced
+    zz = x * x
+    p = np.float32(8.05374449538e-2) * zz - np.float32(1.38776856032e-1)
+    p = p * zz + np.float32(1.99777106478e-1)
+    p = p * zz - np.float32(3.33329491539e-1)
+    return base + p * zz * x + x
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _atan2(y: np.float32, x: np.float32) -> np.float32:
+    """atan2(y, x) in (-pi, pi], float32, branch-free; 0 at (0, 0) as libm's atan2(+0, +0)."""
+    ax = abs(x)
+    ay = abs(y)
+    hi = max(ax, ay)
+    lo = min(ax, ay)
+    t = lo / hi if hi > np.float32(0) else np.float32(0)
+    r = _atan_pos(t)
+    r = np.float32(math.pi / 2) - r if ay > ax else r
+    r = np.float32(math.pi) - r if x < np.float32(0) else r
+    return -r if y < np.float32(0) else r
+
+
+@njit(cache=True, inline="always")
+def _clamp01(s: np.float32) -> np.float32:
+    """``s`` clamped to [0, 1], NaN kept (``min``/``max`` may drop it)."""
+    return np.float32(0) if s < np.float32(0) else (np.float32(1) if s > np.float32(1) else s)
+
+
 @njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
 def _hillshade_rows(
     i0: int,
@@ -123,55 +255,133 @@ def _hillshade_rows(
 ) -> None:
     """Rows ``i0 .. i1`` of :func:`hillshade_kernel` into ``out`` (one band of
     :func:`.run_bands`; needs at least 2 x 2 cells)."""
-    w = z.shape[1]
+    h, w = z.shape
+    f0 = np.float32(0.0)
+    f1 = np.float32(1.0)
+    # Horn: gx = (nw + w + w + sw) - (ne + e + e + se); Zevenbergen & Thorne: w - e. One
+    # loop for both, in GDAL's order of float32 additions (so gx and gy are GDAL's bit for
+    # bit): the terms only Horn has are weighted by cw, 1 or 0, exact either way (0 * NaN is
+    # NaN: a nodata corner still sends the cell to the per-cell path, which is right).
+    cw = np.float32(1.0) if algorithm == 0 else np.float32(0.0)
     zf = z_factor / (2.0 if algorithm == 1 else 8.0)
+    ex = np.float32(inv_ew)
+    ny = np.float32(inv_ns)
     sin_alt = math.sin(math.radians(altitude))
     cos_alt_z = math.cos(math.radians(altitude)) * zf
     az = math.radians(azimuth)
-    cos_az_c = math.cos(az) * cos_alt_z
-    sin_az_c = math.sin(az) * cos_alt_z
-    square_z = zf * zf
-    diag_c = math.cos(math.radians(225.0)) * cos_alt_z
+    sa = np.float32(sin_alt)
+    cc = np.float32(math.cos(az) * cos_alt_z)
+    sc = np.float32(math.sin(az) * cos_alt_z)
+    caz = np.float32(cos_alt_z)
+    dc = np.float32(math.cos(math.radians(225.0)) * cos_alt_z)
+    sq = np.float32(zf * zf)
+    zf32 = np.float32(zf)
+    half = np.float32(0.5)
+    # -igor: GDAL's DifferenceBetweenAngles(aspect, 1.5 pi - az); aspect in (-pi, pi]
+    n2 = np.fmod(1.5 * math.pi - az, 2.0 * math.pi)
+    n2 = np.float32(n2 + 2.0 * math.pi if n2 < 0.0 else n2)
+    pi32 = np.float32(math.pi)
+    two_pi = np.float32(2.0 * math.pi)
+    deg_per_90 = np.float32(180.0 / math.pi / 90.0)
+    inv_sq_half_pi = np.float32(_INV_SQUARE_OF_HALF_PI)
     for i in range(i0, i1):
-        for j in range(w):
-            if np.isnan(z[i, j]):
-                continue
-            w0, w1, w2, w3, _, w5, w6, w7, w8 = _window(z, i, j)
-            if algorithm == 0:  # Horn (1981)
-                gx = np.float64((w0 + w3 + w3 + w6) - (w2 + w5 + w5 + w8))
-                gy = np.float64((w6 + w7 + w7 + w8) - (w0 + w1 + w1 + w2))
-            else:  # Zevenbergen & Thorne (1987)
-                gx = np.float64(w3 - w5)
-                gy = np.float64(w7 - w1)
-            x = gx * inv_ew
-            y = gy * inv_ns
-            xx_plus_yy = x * x + y * y
-            if variant == 3:  # -igor
-                slope_strength = math.degrees(math.atan(math.sqrt(xx_plus_yy) * zf)) / 90.0
-                aspect = math.atan2(gy, gx)  # GDAL: atan2(dy, -dx) with dx = -gx, no resolution
-                diff = _difference_between_angles(aspect, 1.5 * math.pi - az)
-                shade = 1.0 - slope_strength * (1.0 - diff / math.pi)
-            elif variant == 2:  # -multidirectional (Mark 1992)
-                if xx_plus_yy == 0.0:
-                    shade = sin_alt
-                else:
-                    v225 = max(sin_alt + (x - y) * diag_c, 0.0)
-                    v270 = max(sin_alt - x * cos_alt_z, 0.0)
-                    v315 = max(sin_alt + (x + y) * diag_c, 0.0)
-                    v360 = max(sin_alt - y * cos_alt_z, 0.0)
-                    w225 = 0.5 * xx_plus_yy - x * y
-                    w315 = xx_plus_yy - w225
-                    num = w225 * v225 + x * x * v270 + w315 * v315 + y * y * v360
-                    shade = 0.5 * num / xx_plus_yy / math.sqrt(1.0 + square_z * xx_plus_yy)
-            else:
-                slope = square_z * xx_plus_yy
-                cang = (sin_alt - (y * cos_az_c - x * sin_az_c)) / math.sqrt(1.0 + slope)
-                if variant == 1:  # -combined
-                    ang = math.acos(min(max(cang, -1.0), 1.0))
-                    shade = 1.0 - ang * math.atan(math.sqrt(slope)) * _INV_SQUARE_OF_HALF_PI
-                else:
-                    shade = cang
-            out[i, j] = min(max(shade, 0.0), 1.0)
+        o = out[i]
+        if i == 0 or i == h - 1 or w < 3:
+            for j in range(w):
+                s = _pixel(z, i, j, inv_ew, inv_ns, z_factor, azimuth, altitude, algorithm,
+                           variant)  # fmt: skip
+                o[j] = min(max(s, 0.0), 1.0) if not np.isnan(s) else np.nan
+            continue
+        zn = z[i - 1]
+        zc = z[i]
+        zs = z[i + 1]
+        bad = False
+        if variant == 0:
+            for j in range(1, w - 1):
+                gx = (cw * zn[j - 1] + zc[j - 1] + cw * zc[j - 1] + cw * zs[j - 1]) - (
+                    cw * zn[j + 1] + zc[j + 1] + cw * zc[j + 1] + cw * zs[j + 1]
+                )
+                gy = (cw * zs[j - 1] + zs[j] + cw * zs[j] + cw * zs[j + 1]) - (
+                    cw * zn[j - 1] + zn[j] + cw * zn[j] + cw * zn[j + 1]
+                )
+                x = gx * ex
+                y = gy * ny
+                slope = sq * (x * x + y * y)
+                # + (slope - slope): NaN where float32 overflowed (inf), for the float64 path
+                s = (sa - (y * cc - x * sc)) / np.sqrt(f1 + slope)
+                s = s + (zc[j] - zc[j]) + (slope - slope)
+                bad |= s != s
+                o[j] = _clamp01(s)
+        elif variant == 1:  # -combined
+            for j in range(1, w - 1):
+                gx = (cw * zn[j - 1] + zc[j - 1] + cw * zc[j - 1] + cw * zs[j - 1]) - (
+                    cw * zn[j + 1] + zc[j + 1] + cw * zc[j + 1] + cw * zs[j + 1]
+                )
+                gy = (cw * zs[j - 1] + zs[j] + cw * zs[j] + cw * zs[j + 1]) - (
+                    cw * zn[j - 1] + zn[j] + cw * zn[j] + cw * zn[j + 1]
+                )
+                x = gx * ex
+                y = gy * ny
+                slope = sq * (x * x + y * y)
+                cang = (sa - (y * cc - x * sc)) / np.sqrt(f1 + slope)
+                c = min(max(cang, np.float32(-1)), f1)
+                ang = _atan2(np.sqrt((f1 - c) * (f1 + c)), c)  # acos(c)
+                s = f1 - ang * _atan_pos(np.sqrt(slope)) * inv_sq_half_pi
+                s = s + (cang - cang) + (zc[j] - zc[j]) + (slope - slope)
+                bad |= s != s
+                o[j] = _clamp01(s)
+        elif variant == 2:  # -multidirectional (Mark 1992)
+            for j in range(1, w - 1):
+                gx = (cw * zn[j - 1] + zc[j - 1] + cw * zc[j - 1] + cw * zs[j - 1]) - (
+                    cw * zn[j + 1] + zc[j + 1] + cw * zc[j + 1] + cw * zs[j + 1]
+                )
+                gy = (cw * zs[j - 1] + zs[j] + cw * zs[j] + cw * zs[j + 1]) - (
+                    cw * zn[j - 1] + zn[j] + cw * zn[j] + cw * zn[j + 1]
+                )
+                x = gx * ex
+                y = gy * ny
+                xx = x * x + y * y
+                v225 = max(sa + (x - y) * dc, f0)
+                v270 = max(sa - x * caz, f0)
+                v315 = max(sa + (x + y) * dc, f0)
+                v360 = max(sa - y * caz, f0)
+                w225 = half * xx - x * y
+                w315 = xx - w225
+                num = w225 * v225 + x * x * v270 + w315 * v315 + y * y * v360
+                safe = xx if xx > f0 else f1
+                s = half * num / safe / np.sqrt(f1 + sq * xx)
+                s = (s if xx > f0 else sa) + (zc[j] - zc[j]) + (xx - xx) + (num - num)
+                bad |= s != s
+                o[j] = _clamp01(s)
+        else:  # -igor
+            for j in range(1, w - 1):
+                gx = (cw * zn[j - 1] + zc[j - 1] + cw * zc[j - 1] + cw * zs[j - 1]) - (
+                    cw * zn[j + 1] + zc[j + 1] + cw * zc[j + 1] + cw * zs[j + 1]
+                )
+                gy = (cw * zs[j - 1] + zs[j] + cw * zs[j] + cw * zs[j + 1]) - (
+                    cw * zn[j - 1] + zn[j] + cw * zn[j] + cw * zn[j + 1]
+                )
+                x = gx * ex
+                y = gy * ny
+                xx = x * x + y * y
+                strength = _atan_pos(np.sqrt(xx) * zf32) * deg_per_90
+                aspect = _atan2(gy, gx)
+                n1 = aspect + two_pi if aspect < f0 else aspect
+                diff = abs(n1 - n2)
+                diff = two_pi - diff if diff > pi32 else diff
+                s = f1 - strength * (f1 - diff / pi32)
+                s = s + (zc[j] - zc[j]) + (xx - xx) + (gx - gx) + (gy - gy)
+                bad |= s != s
+                o[j] = _clamp01(s)
+        for j in (0, w - 1):
+            s = _pixel(z, i, j, inv_ew, inv_ns, z_factor, azimuth, altitude, algorithm, variant)
+            o[j] = min(max(s, 0.0), 1.0) if not np.isnan(s) else np.nan
+        if bad:  # nodata in a window: those cells by the per-cell statement
+            for j in range(1, w - 1):
+                if o[j] != o[j]:
+                    s = _pixel(z, i, j, inv_ew, inv_ns, z_factor, azimuth, altitude,
+                               algorithm, variant)  # fmt: skip
+                    o[j] = min(max(s, 0.0), 1.0) if not np.isnan(s) else np.nan
 
 
 def fill_ring_kernel(z: np.ndarray, out: np.ndarray) -> None:

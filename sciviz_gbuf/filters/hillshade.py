@@ -14,7 +14,7 @@ from .. import _validate
 from ..errors import InputError
 from . import _hillshade_kernels as _k
 
-__all__ = ["FILL_RING_RADIUS", "RADIUS", "fill_nodata_ring", "hillshade"]
+__all__ = ["FILL_RING_RADIUS", "RADIUS", "check_out", "fill_nodata_ring", "hillshade"]
 
 #: Cells read around each output cell (GDAL's 3x3 window), for chunked evaluation.
 RADIUS = 1
@@ -72,6 +72,7 @@ def hillshade(
     algorithm: str = "horn",
     variant: str = "regular",
     mask: np.ndarray | None = None,
+    out: np.ndarray | None = None,
 ) -> np.ndarray:
     """Shaded relief of a north-up height grid, equal to ``gdaldem hillshade -compute_edges``.
 
@@ -102,6 +103,10 @@ def hillshade(
         ``1 - slope/90 * (1 - |aspect - az|/180)``, which never darkens flat ground.
     mask : (H, W) bool, optional
         False marks nodata cells, like NaN heights.
+    out : (H, W) float32 array, optional
+        Written with the result and returned (C-contiguous, writeable, not sharing memory with
+        ``heights``). For repeated calls on grids of one size: a new array's first touch of
+        its memory costs more than the shading itself on some machines.
 
     Returns
     -------
@@ -117,7 +122,15 @@ def hillshade(
     InputError
         ``heights`` not 2-D or ``mask`` of another shape; ``dx``/``dy`` not finite and positive;
         ``altitude`` outside [0, 90]; non-finite ``azimuth``/``z_factor``; unknown ``algorithm`` or
-        ``variant``.
+        ``variant``; ``out`` of another shape or dtype, not C-contiguous, read-only or overlapping
+        ``heights``; ``out`` with dask input.
+
+    Notes
+    -----
+    Each inner cell is computed in float32 by a vectorised loop; the border cells and those next
+    to nodata by GDAL's per-cell statement in float64. The two agree within 1e-6 of the shade
+    (tested), so the Byte output differs from GDAL's at most by one grey level, and that only
+    where GDAL's own value lies within 1e-6 of a rounding boundary.
 
     References
     ----------
@@ -132,6 +145,8 @@ def hillshade(
        197-206, §4.3.
     """
     if _chunks.any_dask(heights, mask):
+        if out is not None:
+            raise InputError("out: not supported with dask input (the result is lazy)")
         return _chunks.map_stencil(
             hillshade,
             {"heights": heights, "mask": mask},
@@ -151,6 +166,8 @@ def hillshade(
     algorithm = _validate.choice(algorithm, "algorithm", sorted(_ALGORITHMS))
     variant = _validate.choice(variant, "variant", sorted(_VARIANTS))
     z32 = float32_heights(z, mask)  # the kernel only reads it
+    if out is not None:
+        out = check_out(out, z32.shape, heights)
     # GDAL: inv_ewres = 1 / geotransform[1], inv_nsres = 1 / geotransform[5] (negative: north-up).
     return _k.hillshade_kernel(
         z32,
@@ -161,7 +178,25 @@ def hillshade(
         float(altitude),
         _ALGORITHMS[algorithm],
         _VARIANTS[variant],
+        out,
     )
+
+
+def check_out(out: object, shape: tuple[int, ...], source: object) -> np.ndarray:
+    """``out`` as an operator's preallocated result: a C-contiguous, writeable float32
+    array of ``shape`` that shares no memory with ``source`` (the kernel reads the source
+    while it writes the result)."""
+    if not isinstance(out, np.ndarray):
+        raise InputError(f"out: expected a numpy array, got {type(out).__name__}")
+    if out.dtype != np.float32 or out.shape != tuple(shape):
+        raise InputError(
+            f"out: expected a float32 array of shape {tuple(shape)}, got {out.dtype} {out.shape}"
+        )
+    if not out.flags.c_contiguous or not out.flags.writeable:
+        raise InputError("out: expected a C-contiguous, writeable array")
+    if isinstance(source, np.ndarray) and np.shares_memory(out, source):
+        raise InputError("out: shares memory with the heights; pass a separate array")
+    return out
 
 
 def fill_nodata_ring(z: np.ndarray) -> np.ndarray:

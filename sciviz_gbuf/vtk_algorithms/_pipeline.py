@@ -502,7 +502,7 @@ def make_filter_class(
     params = tuple(
         p.name
         for p in inspect.signature(func).parameters.values()
-        if p.kind is inspect.Parameter.KEYWORD_ONLY and p.name not in ("mask", "gradient")
+        if p.kind is inspect.Parameter.KEYWORD_ONLY and p.name not in ("mask", "gradient", "out")
     )
     ns: dict[str, Any] = {
         "_func": staticmethod(func),

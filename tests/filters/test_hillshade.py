@@ -13,6 +13,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from sciviz_gbuf.errors import InputError
+from sciviz_gbuf.filters import _hillshade_kernels as K
 from sciviz_gbuf.filters import hillshade
 
 VARIANTS = ("regular", "combined", "multidirectional", "igor")
@@ -187,6 +188,108 @@ def test_never_crashes_stays_in_range_and_input_untouched(z, variant, algorithm,
 
 
 # ---------------------------------------------------------------------------------------------
+# the vectorised float32 kernel against GDAL's per-cell statement (float64)
+
+_ALG = {"horn": 0, "zevenbergen_thorne": 1}
+_VAR = {"regular": 0, "combined": 1, "multidirectional": 2, "igor": 3}
+
+
+def _both(z, variant, algorithm, dx=3.0, dy=2.0, zf=1.7, az=300.0, alt=40.0):
+    z32 = np.ascontiguousarray(z, np.float32)
+    args = (1.0 / dx, -1.0 / dy, zf, az, alt, _ALG[algorithm], _VAR[variant])
+    return K.hillshade_kernel(z32, *args), K.hillshade_reference_kernel(z32, *args)
+
+
+def rough_dem(n=300, seed=0, holes=True):
+    rng = np.random.default_rng(seed)
+    z = np.cumsum(np.cumsum(rng.standard_normal((n, n + 17)), 0), 1) * 0.5 + 1500.0
+    z[120:135, :] = 1500.0  # flat ground: the multidirectional and igor special cases
+    if holes:
+        z[rng.random(z.shape) < 0.02] = np.nan  # scattered nodata
+        z[40:70, 200:260] = np.nan  # a lake
+        z[:, 5] = np.nan  # a nodata column next to the border
+    return z
+
+
+@pytest.mark.parametrize("algorithm", ALGORITHMS)
+@pytest.mark.parametrize("variant", VARIANTS)
+def test_fast_kernel_equals_the_per_cell_statement(variant, algorithm):
+    for holes in (False, True):
+        fast, ref = _both(rough_dem(holes=holes), variant, algorithm)
+        np.testing.assert_array_equal(np.isnan(fast), np.isnan(ref))
+        assert np.nanmax(np.abs(fast - ref)) <= 2e-5  # 1 grey level is 4e-3
+        assert np.nanstd(ref) > 0.05  # not a flat answer
+    # cells next to nodata and on the border are the reference's own float64 values
+    z = rough_dem()
+    fast, ref = _both(z, variant, algorithm)
+    near = ndimage_dilate(np.isnan(z))
+    near[[0, -1], :] = near[:, [0, -1]] = True
+    np.testing.assert_array_equal(fast[near], ref[near])
+
+
+def ndimage_dilate(m):
+    from scipy import ndimage
+
+    return ndimage.binary_dilation(m, np.ones((3, 3), bool))
+
+
+@settings(max_examples=80, deadline=None)
+@given(
+    arrays(
+        np.float32,
+        st.tuples(st.integers(1, 7), st.integers(1, 9)),
+        elements=st.one_of(
+            st.floats(-(2.0**100), 2.0**100, width=32), st.just(np.nan), st.just(0.0), st.just(3e38)
+        ),
+    ),
+    st.sampled_from(VARIANTS),
+    st.sampled_from(ALGORITHMS),
+)
+def test_fast_kernel_on_odd_grids(z, variant, algorithm):
+    """Tiny grids, huge heights (float32 overflow in the gradient), nodata anywhere: the same
+    cells are nodata and the values agree (overflowing cells go to the per-cell path)."""
+    fast, ref = _both(z, variant, algorithm, dx=1.0, dy=1.0)
+    np.testing.assert_array_equal(np.isnan(fast), np.isnan(ref))
+    np.testing.assert_allclose(fast, ref, atol=2e-5)
+
+
+def test_out_is_written_and_returned():
+    z = rough_dem(100)
+    expected = hillshade(z, dx=3.0, variant="multidirectional")
+    out = np.full(z.shape, 7.0, np.float32)  # stale values must all be overwritten
+    got = hillshade(z, dx=3.0, variant="multidirectional", out=out)
+    assert got is out
+    np.testing.assert_array_equal(out, expected)
+    tiny = np.full((1, 4), 7.0, np.float32)
+    assert np.isnan(hillshade(np.ones((1, 4)), out=tiny)).all()
+
+
+@pytest.mark.parametrize(
+    "out",
+    [
+        np.zeros((100, 117), np.float64),
+        np.zeros((100, 116), np.float32),
+        np.zeros((117, 100), np.float32).T,
+        [[0.0]],
+    ],
+)
+def test_bad_out_is_refused(out):
+    z = rough_dem(100)
+    with pytest.raises(InputError, match="out"):
+        hillshade(z, out=out)
+
+
+def test_out_may_not_alias_the_heights():
+    z = rough_dem(50).astype(np.float32)
+    with pytest.raises(InputError, match="shares memory"):
+        hillshade(z, out=z)
+    ro = np.zeros(z.shape, np.float32)
+    ro.flags.writeable = False
+    with pytest.raises(InputError, match="writeable"):
+        hillshade(z, out=ro)
+
+
+# ---------------------------------------------------------------------------------------------
 # against gdaldem (GDAL's Byte output: 0 = nodata, 1..255 = shade)
 
 
@@ -292,6 +395,6 @@ def test_matches_gdaldem(case, variant, algorithm, shared_data, tmp_path):
     np.testing.assert_array_equal(np.isnan(ours), ~valid)  # nodata at the same cells
     diff = np.abs(as_gdal_bytes(ours, variant) - gdal.astype(np.int16))[valid]
     assert diff.mean() <= 0.5, diff.mean()
-    assert diff.max() <= 2, diff.max()
+    assert diff.max() <= 1, diff.max()
     # the comparison is not vacuous: the output spans a range of grey levels
     assert np.ptp(gdal[valid]) > 20
