@@ -462,6 +462,8 @@ def vectorize(
 
     def piece(pts: np.ndarray, w: float, closed: bool) -> None:
         keep = simplify(np.vstack([pts, pts[:1]]), tol)[:-1] if closed else simplify(pts, tol)
+        if len(keep) < 2:
+            return  # a ring within the tolerance of one point (a hole of one pixel): a dot
         width = fixed if fixed is not None else round(float(np.clip(w, 0.25, 64.0)), 2)
         strokes.append(Stroke(keep, width, kind, rgb, None, closed))
 

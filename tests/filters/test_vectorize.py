@@ -244,3 +244,12 @@ def test_vector_edges_agree_with_the_raster_edges(cad):
     drawn = rasterize(edge_strokes(gb), raster.shape)
     precision, recall = precision_recall(drawn, raster, tol_px=1.5)
     assert precision >= 0.97 and recall >= 0.97
+
+
+def test_a_one_pixel_hole_in_a_patch_is_no_stroke_of_one_point():
+    """Found by hypothesis in CI: the skeleton of a patch of ink around a one-pixel hole is a
+    ring within the tolerance of a point; it was a closed stroke of one vertex."""
+    img = np.ones((4, 15), np.float32)
+    img[2, 11] = 0.0
+    for s in vectorize(img, min_length=0):
+        assert len(s.points) >= 2
