@@ -43,7 +43,8 @@ def _window(z: np.ndarray, i: int, j: int) -> tuple:
 
     First/last row: the missing row is extrapolated vertically and missing columns repeat the centre
     column; other rows: a missing column is extrapolated horizontally. Nodata (NaN) neighbours,
-    including extrapolations from nodata, are replaced by the centre value.
+    including extrapolations from nodata, are replaced by the centre value (+-inf is nodata too,
+    so the caller need not look for it first).
     """
     h, w = z.shape
     if i == 0 or i == h - 1:
@@ -76,14 +77,14 @@ def _window(z: np.ndarray, i: int, j: int) -> tuple:
         else:
             w2, w5, w8 = z[i - 1, j + 1], z[i, j + 1], z[i + 1, j + 1]
     c = w4
-    w0 = c if np.isnan(w0) else w0
-    w1 = c if np.isnan(w1) else w1
-    w2 = c if np.isnan(w2) else w2
-    w3 = c if np.isnan(w3) else w3
-    w5 = c if np.isnan(w5) else w5
-    w6 = c if np.isnan(w6) else w6
-    w7 = c if np.isnan(w7) else w7
-    w8 = c if np.isnan(w8) else w8
+    w0 = c if not np.isfinite(w0) else w0
+    w1 = c if not np.isfinite(w1) else w1
+    w2 = c if not np.isfinite(w2) else w2
+    w3 = c if not np.isfinite(w3) else w3
+    w5 = c if not np.isfinite(w5) else w5
+    w6 = c if not np.isfinite(w6) else w6
+    w7 = c if not np.isfinite(w7) else w7
+    w8 = c if not np.isfinite(w8) else w8
     return w0, w1, w2, w3, w4, w5, w6, w7, w8
 
 
@@ -109,7 +110,7 @@ def _pixel(
     azimuth: float, altitude: float, algorithm: int, variant: int,
 ) -> float:  # fmt: skip
     """GDAL's shade of cell (i, j), in float64 (NaN at a nodata cell), unclamped."""
-    if np.isnan(z[i, j]):
+    if not np.isfinite(z[i, j]):
         return np.nan
     zf = z_factor / (2.0 if algorithm == 1 else 8.0)
     sin_alt = math.sin(math.radians(altitude))
@@ -200,23 +201,31 @@ def hillshade_kernel(
 
 # Cephes' atanf (single precision, relative error ~1e-7), branch-free: the range reduction
 # by selects, so that the loops calling it vectorise.
-_T3P8 = 2.414213562373095  # tan(3 pi / 8)
 _TP8 = 0.4142135623730950  # tan(pi / 8)
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _atan_pos(t: np.float32) -> np.float32:
-    """atan(t) for t >= 0 (inf included), float32."""
-    big = t > np.float32(_T3P8)
-    mid = t > np.float32(_TP8)
-    base = np.float32(math.pi / 2) if big else (np.float32(math.pi / 4) if mid else np.float32(0))
-    reduced = (t - np.float32(1)) / (t + np.float32(1)) if mid else t
-    x = np.float32(-1.0) / t if big else reduced
+def _atan_ratio(lo: np.float32, hi: np.float32) -> np.float32:
+    """atan(lo / hi) for 0 <= lo <= hi (0 where hi is 0), float32, with one division: Cephes'
+    reduction by pi/4 above tan(pi/8) folded into the quotient, (lo - hi) / (lo + hi)."""
+    mid = lo > np.float32(_TP8) * hi
+    num = lo - hi if mid else lo
+    den = lo + hi if mid else hi
+    x = num / den if den > np.float32(0) else np.float32(0)
     zz = x * x
     p = np.float32(8.05374449538e-2) * zz - np.float32(1.38776856032e-1)
     p = p * zz + np.float32(1.99777106478e-1)
     p = p * zz - np.float32(3.33329491539e-1)
+    base = np.float32(math.pi / 4) if mid else np.float32(0)
     return base + p * zz * x + x
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _atan_pos(t: np.float32) -> np.float32:
+    """atan(t) for t >= 0 (inf included), float32: atan(1/t) = pi/2 - atan(t) above 1."""
+    one = np.float32(1)
+    r = _atan_ratio(min(t, one), max(t, one))
+    return np.float32(math.pi / 2) - r if t > one else r
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -224,10 +233,7 @@ def _atan2(y: np.float32, x: np.float32) -> np.float32:
     """atan2(y, x) in (-pi, pi], float32, branch-free; 0 at (0, 0) as libm's atan2(+0, +0)."""
     ax = abs(x)
     ay = abs(y)
-    hi = max(ax, ay)
-    lo = min(ax, ay)
-    t = lo / hi if hi > np.float32(0) else np.float32(0)
-    r = _atan_pos(t)
+    r = _atan_ratio(min(ax, ay), max(ax, ay))
     r = np.float32(math.pi / 2) - r if ay > ax else r
     r = np.float32(math.pi) - r if x < np.float32(0) else r
     return -r if y < np.float32(0) else r
@@ -281,6 +287,7 @@ def _hillshade_rows(
     n2 = np.fmod(1.5 * math.pi - az, 2.0 * math.pi)
     n2 = np.float32(n2 + 2.0 * math.pi if n2 < 0.0 else n2)
     pi32 = np.float32(math.pi)
+    inv_pi = np.float32(1.0 / math.pi)
     two_pi = np.float32(2.0 * math.pi)
     deg_per_90 = np.float32(180.0 / math.pi / 90.0)
     inv_sq_half_pi = np.float32(_INV_SQUARE_OF_HALF_PI)
@@ -369,7 +376,7 @@ def _hillshade_rows(
                 n1 = aspect + two_pi if aspect < f0 else aspect
                 diff = abs(n1 - n2)
                 diff = two_pi - diff if diff > pi32 else diff
-                s = f1 - strength * (f1 - diff / pi32)
+                s = f1 - strength * (f1 - diff * inv_pi)
                 s = s + (zc[j] - zc[j]) + (xx - xx) + (gx - gx) + (gy - gy)
                 bad |= s != s
                 o[j] = _clamp01(s)

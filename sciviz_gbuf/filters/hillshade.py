@@ -165,7 +165,9 @@ def hillshade(
     _validate.finite(azimuth, "azimuth")
     algorithm = _validate.choice(algorithm, "algorithm", sorted(_ALGORITHMS))
     variant = _validate.choice(variant, "variant", sorted(_VARIANTS))
-    z32 = float32_heights(z, mask)  # the kernel only reads it
+    # The kernel only reads it and takes +-inf as nodata itself (a pass looking for
+    # infinities first would cost a third of the shading).
+    z32 = float32_heights(z, mask) if mask is not None else np.ascontiguousarray(z, np.float32)
     if out is not None:
         out = check_out(out, z32.shape, heights)
     # GDAL: inv_ewres = 1 / geotransform[1], inv_nsres = 1 / geotransform[5] (negative: north-up).
