@@ -38,6 +38,7 @@ from .errors import OutputError, SciVizGBufError
 __all__ = [
     "Interrupted",
     "Part",
+    "atomic_folder",
     "atomic_output",
     "native_stderr",
     "one_line",
@@ -458,3 +459,30 @@ def scratch_file(final: str | os.PathLike, tag: str) -> Iterator[Path]:
         yield path
     finally:
         _remove(path)
+
+
+@contextmanager
+def atomic_folder(path: str | os.PathLike) -> Iterator[Path]:
+    """Write the folder ``path`` completely or not at all (a tile pyramid: thousands of files).
+
+    The block fills a temporary folder beside it (``.<name>.<random>.part``), which is renamed
+    to ``path`` when the block ends without an exception (``path`` must not exist, or be an
+    empty folder, which it replaces); on any exception, interrupts included, the temporary
+    folder is removed. OS errors become an :class:`~sciviz_gbuf.errors.OutputError` naming
+    ``path``.
+    """
+    import shutil
+
+    final = Path(path)
+    tmp = final.with_name(f".{final.name}.{secrets.token_hex(4)}.part")
+    try:
+        tmp.mkdir()
+        yield tmp
+        if final.is_dir():
+            final.rmdir()  # empty (else rmdir fails: nothing is replaced)
+        os.replace(tmp, final)
+    except BaseException as exc:
+        shutil.rmtree(tmp, ignore_errors=True)
+        if isinstance(exc, OSError):
+            raise OutputError(f"{final}: could not be written ({_describe(exc)})") from exc
+        raise

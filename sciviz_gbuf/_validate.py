@@ -65,6 +65,7 @@ LIMITS: dict[str, float] = {
     "layers": 8,  # surfaces kept per pixel by capture(layers=k)
     "font_size": 512.0,  # px: contour label and map furniture text
     "label_spacing": 16384.0,  # px: distance between contour labels along a line
+    "tiles": 1_000_000,  # web-map tiles of one pyramid (all zoom levels)
 }
 
 

@@ -19,6 +19,7 @@ from ..recipes.birdseye import birdseye_gbuffer, birdseye_panels, sumi_e
 from ..recipes.labels import contour_labels, label_options, labels_to_geojson
 from ..recipes.layout import PAGES, write_map_page
 from ..recipes.terrain import RELIEFS, topographic_map
+from ..recipes.tiles import write_map_tiles
 from ..recipes.vector import topographic_picture, write_vector
 from ..writers.cog import (
     check_chunk_memory,
@@ -347,8 +348,16 @@ def _topo_page(args: argparse.Namespace, source, out: Path, show: bool, t0: floa
 
 
 def _cmd_topo(args: argparse.Namespace) -> int:
-    out, tif = _topo_paths(args)
     source = None if not args.dem else args.dem[0] if len(args.dem) == 1 else list(args.dem)
+    if args.tiles is not None:
+        return _topo_tiles(args, source, time.perf_counter())
+    if args.output is None:
+        raise InputError("--output: expected a map file (-o map.png) or --tiles FOLDER")
+    for flag, value in (("--zoom", args.zoom), ("--tile-size", args.tile_size),
+                        ("--tile-format", args.tile_format)):  # fmt: skip
+        if value is not None:
+            raise InputError(f"{flag}: comes with --tiles FOLDER")
+    out, tif = _topo_paths(args)
     t0 = time.perf_counter()
     show = show_progress(args)
     if args.chunks is not None or args.dask is not None:
@@ -484,6 +493,84 @@ def _topo_out_of_core(args: argparse.Namespace, source, out: Path, show: bool, t
     return 0
 
 
+def _zoom_arg(text: str) -> tuple[int, int]:
+    parts = text.replace(" ", "").split("-")
+    try:
+        vals = [int(v) for v in parts]
+    except ValueError:
+        vals = []
+    if len(vals) not in (1, 2) or not 0 <= vals[0] <= vals[-1] <= 24:
+        raise argparse.ArgumentTypeError(
+            f"expected a zoom level or a range MIN-MAX within 0-24 such as 8-14, got {text!r}"
+        )
+    return vals[0], vals[-1]
+
+
+def _topo_tiles(args: argparse.Namespace, source, t0: float) -> int:
+    """``--tiles FOLDER``: the map of every zoom level cut into an XYZ tile pyramid with a
+    Leaflet viewer (index.html)."""
+    if args.output is not None:
+        raise InputError("--tiles: the map is written as tiles into the folder: leave out -o")
+    refused = (("--page", args.page), ("--geotiff", args.geotiff), ("--overview", args.overview),
+               ("--size", args.size), ("--scale", args.scale), ("--dpi", args.dpi),
+               ("--labels-geojson", args.labels_geojson), ("--graticule", args.graticule),
+               ("--title", args.title), ("--credit", args.credit))  # fmt: skip
+    for flag, value in refused:
+        if value is not None:
+            raise InputError(f"{flag}: not with --tiles (a tile's pixel size is its zoom's)")
+    if args.labels and (args.chunks is not None or args.dask is not None):
+        raise InputError(
+            "--labels: labels are placed on each zoom level's whole map in memory; not with "
+            "--chunks/--dask"
+        )
+    out = Path(args.tiles)
+    if out.exists() and (not out.is_dir() or any(out.iterdir())):
+        raise InputError(f"--tiles: {str(out)!r} exists and is not an empty folder")
+    if not out.parent.is_dir():
+        raise InputError(f"--tiles: no such directory {str(out.parent)!r}")
+    show = show_progress(args)
+    lazy = args.chunks is not None or args.dask is not None
+    if lazy and source is None:
+        raise InputError("dem: out of core (--chunks/--dask) needs DEM file(s) to read")
+    dem = (read_dem(source, chunks=args.chunks or 2048, geographic=args.geographic) if lazy
+           else _read_terrain(source, args.geographic))  # fmt: skip
+    opts = _topo_options(args, False)
+    for key in ("size", "scale", "dpi", "progress_bar"):
+        opts.pop(key, None)
+    client = local_client(args.workers or 2, memory_limit=args.memory_limit or "3GB") if (
+        args.dask == "local") else None  # fmt: skip
+    if args.dask not in (None, "local"):
+        from distributed import Client
+
+        try:
+            client = Client(args.dask, timeout="10s")
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise InputError(
+                f"--dask: cannot connect to a dask scheduler at {args.dask!r} ({exc})"
+            ) from exc
+    try:
+        with progress(show, 1, "topo tiles") as bar:
+            pyramid = write_map_tiles(
+                dem, out, zoom=args.zoom, tile_size=args.tile_size or 256,
+                format=args.tile_format or "png", client=client,
+                title=Path(args.dem[0]).name if args.dem else "Jacksboro fault DEM", **opts,
+            )  # fmt: skip
+            bar.step("done")
+    finally:
+        if client is not None:
+            cluster = client.cluster if args.dask == "local" else None
+            client.close()
+            if cluster is not None:
+                cluster.close()
+    z0, z1 = pyramid.zooms
+    per = ", ".join(f"{z}: {n}" for z, n in pyramid.tiles.items())
+    print(
+        f"wrote {out}/ ({pyramid.count} tiles, zoom {z0}-{z1}: {per}; viewer "
+        f"{out / 'index.html'}) in {time.perf_counter() - t0:.1f} s"
+    )
+    return 0
+
+
 def _cmd_birdseye(args: argparse.Namespace) -> int:
     out = png_output(args.output)
     if args.labels and args.style not in ("mx4", "cn"):
@@ -578,7 +665,8 @@ def _add_map_style(p: argparse.ArgumentParser, *, tiles: bool = False) -> None:
     p.add_argument(
         "-o",
         "--output",
-        required=True,
+        required=not tiles,
+        default=None,
         help="output image (.png, .tif for a Cloud-Optimised GeoTIFF, or .svg/.pdf: vector "
         "contours and labels over the map image)"
         if tiles
@@ -771,6 +859,31 @@ def add_topo(sub) -> None:
         default=2048,
         metavar="PX",
         help="long side of the --overview PNG in pixels (default 2048)",
+    )
+    tiles = p.add_argument_group("web map tiles")
+    tiles.add_argument(
+        "--tiles",
+        default=None,
+        metavar="FOLDER",
+        help="write the map as an XYZ web-map tile pyramid (Web Mercator, FOLDER/z/x/y.png) "
+        "with a viewer, FOLDER/index.html (Leaflet, bundled); instead of -o",
+    )
+    tiles.add_argument(
+        "--zoom",
+        type=_zoom_arg,
+        default=None,
+        metavar="MIN-MAX",
+        help="zoom levels of --tiles, e.g. 8-14 (default: the DEM's native zoom, whose pixels "
+        "are no larger than its cells, and the four below)",
+    )
+    tiles.add_argument(
+        "--tile-size", type=int, choices=[256, 512], default=None, help="tile side in pixels"
+    )
+    tiles.add_argument(
+        "--tile-format",
+        choices=["png", "webp"],
+        default=None,
+        help="png (default) or lossless webp",
     )
     add_progress(p)
     p.set_defaults(func=_cmd_topo)

@@ -39,6 +39,7 @@ from .medical import (
 from .saito1990 import CAPTIONS, fig3_panels, fig7_panels, nut_camera
 from .surface import seam_patches, surface_analysis, surface_gbuffer, surface_layers
 from .terrain import map_grid, nice_intervals, topographic_map
+from .tiles import TilePyramid, mercator_dem, native_zoom, tile_bounds, write_map_tiles
 from .vector import (
     VectorPicture,
     drawing_picture,
@@ -55,6 +56,7 @@ __all__ = [
     "CONTOUR_CAPTIONS",
     "STYLES",
     "ContourLabel",
+    "TilePyramid",
     "VectorPicture",
     "birdseye_gbuffer",
     "birdseye_layers",
@@ -79,7 +81,9 @@ __all__ = [
     "illustrate",
     "labels_to_geojson",
     "map_grid",
+    "mercator_dem",
     "named_view_camera",
+    "native_zoom",
     "nice_intervals",
     "nut_camera",
     "oblique_camera",
@@ -94,9 +98,11 @@ __all__ = [
     "technical_drawing",
     "technical_drawing_image",
     "terrain_birdseye_camera",
+    "tile_bounds",
     "topographic_map",
     "topographic_picture",
     "view_camera",
+    "write_map_tiles",
     "write_panels",
     "write_vector",
 ]
