@@ -26,7 +26,7 @@ from numba import njit
 
 from ..core.bands import run_bands
 
-__all__ = ["fill_ring_kernel", "hillshade_kernel", "hillshade_reference_kernel"]
+__all__ = ["atan_pos", "fill_ring_kernel", "hillshade_kernel", "hillshade_reference_kernel"]
 
 _INV_SQUARE_OF_HALF_PI = 1.0 / ((math.pi * math.pi) / 4.0)
 
@@ -221,7 +221,7 @@ def _atan_ratio(lo: np.float32, hi: np.float32) -> np.float32:
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _atan_pos(t: np.float32) -> np.float32:
+def atan_pos(t: np.float32) -> np.float32:
     """atan(t) for t >= 0 (inf included), float32: atan(1/t) = pi/2 - atan(t) above 1."""
     one = np.float32(1)
     r = _atan_ratio(min(t, one), max(t, one))
@@ -333,7 +333,7 @@ def _hillshade_rows(
                 cang = (sa - (y * cc - x * sc)) / np.sqrt(f1 + slope)
                 c = min(max(cang, np.float32(-1)), f1)
                 ang = _atan2(np.sqrt((f1 - c) * (f1 + c)), c)  # acos(c)
-                s = f1 - ang * _atan_pos(np.sqrt(slope)) * inv_sq_half_pi
+                s = f1 - ang * atan_pos(np.sqrt(slope)) * inv_sq_half_pi
                 s = s + (cang - cang) + (zc[j] - zc[j]) + (slope - slope)
                 bad |= s != s
                 o[j] = _clamp01(s)
@@ -371,7 +371,7 @@ def _hillshade_rows(
                 x = gx * ex
                 y = gy * ny
                 xx = x * x + y * y
-                strength = _atan_pos(np.sqrt(xx) * zf32) * deg_per_90
+                strength = atan_pos(np.sqrt(xx) * zf32) * deg_per_90
                 aspect = _atan2(gy, gx)
                 n1 = aspect + two_pi if aspect < f0 else aspect
                 diff = abs(n1 - n2)
