@@ -9,7 +9,9 @@ What is measured, on synthetic fractal terrain (spectral synthesis, power ~ 1/f^
 ~1500 m of relief, float32):
 
 * ``cast_shadows`` at azimuth 315 and altitude 30 (hard shadows) and with ``sun_radius=0.5``;
-  ``sky_view`` with 16 directions and the default radius (50 cells, 1500 m).
+  ``sky_view`` and ``openness`` with 16 directions and the default radius (50 cells, 1500 m);
+  up to 2048^2 also the per-cell ray march ``sky_view`` ran before its row march (the same
+  samples, kept as the reference the tests hold the row march to).
 * Peer, same grid, same run: ``hillshade`` (a 3x3 stencil: the floor of any per-cell terrain
   shading). The ``x hillshade`` column is the time relative to it.
 * Numpy references on the smallest size: shadows for a west sun (azimuth 270) as the row-wise
@@ -40,8 +42,10 @@ if not os.environ.get("DISPLAY"):
 
 import numba
 
+from sciviz_gbuf.filters import _terrain_light_kernels as K
+from sciviz_gbuf.filters import terrain_light as T
 from sciviz_gbuf.filters.hillshade import hillshade
-from sciviz_gbuf.filters.terrain_light import cast_shadows, sky_view
+from sciviz_gbuf.filters.terrain_light import cast_shadows, openness, sky_view
 
 CELL = 30.0  # metres
 AZIMUTH, ALTITUDE = 315.0, 30.0
@@ -144,7 +148,13 @@ def main(argv: list[str] | None = None) -> int:
             ("cast_shadows", partial(cast_shadows, z, **sun)),
             ("cast_shadows sun_radius=0.5", partial(cast_shadows, z, sun_radius=0.5, **sun)),
             ("sky_view 16 dirs r=50 px", partial(sky_view, z, dx=CELL, dy=CELL)),
+            ("openness 16 dirs r=50 px", partial(openness, z, dx=CELL, dy=CELL)),
         ]
+        if n <= 2048:  # the per-cell march sky_view ran before the row march: slow
+            zz = T._prepare(z, CELL, CELL, 1.0, None)
+            rays = T._sky_rays(zz, CELL, CELL, 16, T.default_sky_radius(CELL, CELL))
+            cells.append(("sky_view per-cell (before)",
+                          partial(K.sky_view_reference_kernel, zz, *rays)))  # fmt: skip
         base = None
         for name, fn in cells:
             t, cores = best_time(fn, args.min_repeats, args.target)

@@ -406,7 +406,6 @@ def _horizon_row(
     rw: int,
     col_ub: np.ndarray,
     cw: int,
-    local_ub: np.ndarray,
     floor_tan: float,
     best: np.ndarray,
     n_in: np.ndarray,
@@ -417,7 +416,6 @@ def _horizon_row(
     scratch of the row's length."""
     h, w = z.shape
     zi = z[i]
-    lub = local_ub[i]
     f0 = np.float32(floor_tan)
     for j in range(w):
         best[j] = f0
@@ -504,8 +502,9 @@ def _horizon_row(
                 zb = z[r0 + 1]
                 _step_lerp_max(za[ja + shift : jb + shift], zb[ja + shift : jb + shift],
                                zi[ja:jb], best[ja:jb], f, inv)  # fmt: skip
-        # every few steps: stop once no cell's ray can rise further (the march's bounds:
-        # the rows / columns ahead and the local maximum)
+        # every few steps: stop once no cell's ray can rise further (the march's bounds of the
+        # rows / columns ahead; the per-cell march's local maximum, a box filter as wide as the
+        # rays, would cost as much as the march and rarely ends a whole row early)
         if k % 4 == 0 and k < n_k:
             nxt = (k + 1) * step_len
             done = True
@@ -513,7 +512,7 @@ def _horizon_row(
                 rub = row_ub[rw, min(max(i + (k + 1) * di, 0), h - 1)]
                 for j in range(ja, jb):
                     reach = far if best[j] < 0 else nxt
-                    if min(rub, lub[j]) - zi[j] > best[j] * reach:
+                    if rub - zi[j] > best[j] * reach:
                         done = False
                         break
             else:
@@ -522,7 +521,7 @@ def _horizon_row(
                 for j in range(ja, jb):
                     reach = far if best[j] < 0 else nxt
                     cub = col_ub[cw, min(max(j + (k + 1) * dj, 0), w - 1)]
-                    if min(rub, cub, lub[j]) - zi[j] > best[j] * reach:
+                    if min(rub, cub) - zi[j] > best[j] * reach:
                         done = False
                         break
             if done:
@@ -538,16 +537,18 @@ def sky_view_kernel(
     col_ubs: np.ndarray,
     row_which: np.ndarray,
     col_which: np.ndarray,
-    local_ub: np.ndarray,
+    local_ub: np.ndarray | None,
     radius: float,
 ) -> np.ndarray:
-    """Sky-view factor of every cell of ``z``, row by row (:func:`_horizon_row`)."""
+    """Sky-view factor of every cell of ``z``, row by row (:func:`_horizon_row`); the
+    arguments of :func:`sky_view_reference_kernel` (``local_ub``, its per-cell bound, is not
+    used and may be None)."""
     h, w = z.shape
     out = np.empty((h, w), dtype=np.float32)
     max_steps = _march_steps(step_lens, radius, h, w)
     run_bands(
         _sky_rows, h, z, d_rows, d_cols, step_lens, row_ubs, col_ubs, row_which, col_which,
-        local_ub, max_steps, 0, out,
+        max_steps, 0, out,
         scratch=lambda: (np.empty(w, np.float32), np.empty(w, np.int64), np.empty(w)),
     )  # fmt: skip
     return out
@@ -562,17 +563,17 @@ def openness_kernel(
     col_ubs: np.ndarray,
     row_which: np.ndarray,
     col_which: np.ndarray,
-    local_ub: np.ndarray,
+    local_ub: np.ndarray | None,
     radius: float,
 ) -> np.ndarray:
     """Positive openness of every cell of ``z``, row by row (:func:`_horizon_row`); as
-    :func:`openness_reference_kernel`."""
+    :func:`openness_reference_kernel` (``local_ub`` not used, may be None)."""
     h, w = z.shape
     out = np.empty((h, w), dtype=np.float32)
     max_steps = _march_steps(step_lens, radius, h, w)
     run_bands(
         _sky_rows, h, z, d_rows, d_cols, step_lens, row_ubs, col_ubs, row_which, col_which,
-        local_ub, max_steps, 1, out,
+        max_steps, 1, out,
         scratch=lambda: (np.empty(w, np.float32), np.empty(w, np.int64), np.empty(w)),
     )  # fmt: skip
     return out
@@ -590,7 +591,6 @@ def _sky_rows(
     col_ubs: np.ndarray,
     row_which: np.ndarray,
     col_which: np.ndarray,
-    local_ub: np.ndarray,
     max_steps: np.ndarray,
     mode: int,
     out: np.ndarray,
@@ -610,7 +610,7 @@ def _sky_rows(
             acc[j] = 0.0
         for d in range(n):
             _horizon_row(z, i, d_rows[d], d_cols[d], step_lens[d], max_steps[d], row_ubs,
-                         row_which[d], col_ubs, col_which[d], local_ub, floor_tan, best,
+                         row_which[d], col_ubs, col_which[d], floor_tan, best,
                          n_in)  # fmt: skip
             if mode == 0:
                 for j in range(w):

@@ -106,10 +106,13 @@ def _ray_steps(azimuth: float, dx: float, dy: float) -> tuple[float, float, floa
     return _snap(per_m_row / m), _snap(per_m_col / m), 1.0 / m
 
 
-def _sky_rays(z: np.ndarray, dx: float, dy: float, directions: int, radius: float) -> tuple:
+def _sky_rays(
+    z: np.ndarray, dx: float, dy: float, directions: int, radius: float, local: bool = True
+) -> tuple:
     """The ray arguments of the sky kernels (:func:`sky_view`, :func:`openness`) after ``z``:
     per direction the steps (rows, columns, metres) and which bounds apply, the row and column
-    height bounds, the local maximum within ``radius``, and ``radius``."""
+    height bounds, the local maximum within ``radius`` (None without ``local``: the row
+    march does not use it), and ``radius``."""
     steps = [
         _ray_steps(360.0 * k / int(directions), float(dx), float(dy)) for k in range(directions)
     ]
@@ -125,7 +128,7 @@ def _sky_rays(z: np.ndarray, dx: float, dy: float, directions: int, radius: floa
         _bounds(cols),
         row_which,
         col_which,
-        _local_max(z, float(radius), float(dx), float(dy)),
+        _local_max(z, float(radius), float(dx), float(dy)) if local else None,
         float(radius),
     )
 
@@ -310,7 +313,7 @@ def sky_view(
     z = _prepare(heights, dx, dy, z_factor, mask)
     if z.size == 0:
         return z
-    return _k.sky_view_kernel(z, *_sky_rays(z, dx, dy, directions, radius))
+    return _k.sky_view_kernel(z, *_sky_rays(z, dx, dy, directions, radius, local=False))
 
 
 def openness(
@@ -399,4 +402,4 @@ def openness(
         return z
     if kind == "negative":
         np.negative(z, out=z)  # a private copy: the openness of the inverted terrain
-    return _k.openness_kernel(z, *_sky_rays(z, dx, dy, directions, radius))
+    return _k.openness_kernel(z, *_sky_rays(z, dx, dy, directions, radius, local=False))
