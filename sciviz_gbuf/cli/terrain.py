@@ -428,14 +428,10 @@ def _topo_vector(args: argparse.Namespace, source, out: Path, show: bool, t0: fl
     return 0
 
 
-def _topo_out_of_core(args: argparse.Namespace, source, out: Path, show: bool, t0: float) -> int:
-    """``--chunks``/``--dask``: lazy DEM -> lazy map -> COG written block by block."""
-    if source is None:
-        raise InputError("dem: out of core (--chunks/--dask) needs DEM file(s) to read")
-    # Read (metadata only) before a cluster starts: a bad file fails fast.
-    dem = read_dem(source, chunks=args.chunks or 2048, geographic=args.geographic)
-    block = tuple(int(v) for v in dem.heights.chunksize)
-    client = None
+def _dask_client(args: argparse.Namespace, block: tuple[int, ...]):
+    """The dask.distributed client of ``--dask`` (a new local cluster, or the scheduler at
+    its address; None without ``--dask``), the memory limit checked against a chunk of
+    ``block`` cells before any worker starts."""
     if args.dask == "local":
         from dask.utils import parse_bytes
 
@@ -446,17 +442,37 @@ def _topo_out_of_core(args: argparse.Namespace, source, out: Path, show: bool, t
             raise InputError(
                 f"--memory-limit: expected a size such as 3GB, got {limit!r}"
             ) from None
-        check_chunk_memory(block, limit_bytes)  # before any worker starts
-        client = local_client(args.workers or 2, memory_limit=limit)
-    elif args.dask is not None:
+        check_chunk_memory(block, limit_bytes)
+        return local_client(args.workers or 2, memory_limit=limit)
+    if args.dask is not None:
         from distributed import Client
 
         try:
-            client = Client(args.dask, timeout="10s")
+            return Client(args.dask, timeout="10s")
         except (OSError, TimeoutError, ValueError) as exc:
             raise InputError(
                 f"--dask: cannot connect to a dask scheduler at {args.dask!r} ({exc})"
             ) from exc
+    return None
+
+
+def _close_client(args: argparse.Namespace, client) -> None:
+    """Close the client of :func:`_dask_client`, and its cluster if ``--dask`` made one."""
+    if client is not None:
+        cluster = client.cluster if args.dask == "local" else None
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def _topo_out_of_core(args: argparse.Namespace, source, out: Path, show: bool, t0: float) -> int:
+    """``--chunks``/``--dask``: lazy DEM -> lazy map -> COG written block by block."""
+    if source is None:
+        raise InputError("dem: out of core (--chunks/--dask) needs DEM file(s) to read")
+    # Read (metadata only) before a cluster starts: a bad file fails fast.
+    dem = read_dem(source, chunks=args.chunks or 2048, geographic=args.geographic)
+    block = tuple(int(v) for v in dem.heights.chunksize)
+    client = _dask_client(args, block)
     try:
         if client is not None:
             check_worker_memory(client, block)
@@ -478,11 +494,7 @@ def _topo_out_of_core(args: argparse.Namespace, source, out: Path, show: bool, t
             raise killed_worker_error(block) from exc
         raise
     finally:
-        if client is not None:
-            cluster = client.cluster if args.dask == "local" else None
-            client.close()
-            if cluster is not None:
-                cluster.close()
+        _close_client(args, client)
     h, w = dem.shape
     where = "local threads" if client is None else f"dask cluster {args.dask}"
     extra = f" and {args.overview}" if args.overview else ""
@@ -537,17 +549,8 @@ def _topo_tiles(args: argparse.Namespace, source, t0: float) -> int:
     opts = _topo_options(args, False)
     for key in ("size", "scale", "dpi", "progress_bar"):
         opts.pop(key, None)
-    client = local_client(args.workers or 2, memory_limit=args.memory_limit or "3GB") if (
-        args.dask == "local") else None  # fmt: skip
-    if args.dask not in (None, "local"):
-        from distributed import Client
-
-        try:
-            client = Client(args.dask, timeout="10s")
-        except (OSError, TimeoutError, ValueError) as exc:
-            raise InputError(
-                f"--dask: cannot connect to a dask scheduler at {args.dask!r} ({exc})"
-            ) from exc
+    block = tuple(int(v) for v in dem.heights.chunksize) if lazy else dem.shape
+    client = _dask_client(args, block)
     try:
         with progress(show, 1, "topo tiles") as bar:
             pyramid = write_map_tiles(
@@ -557,11 +560,7 @@ def _topo_tiles(args: argparse.Namespace, source, t0: float) -> int:
             )  # fmt: skip
             bar.step("done")
     finally:
-        if client is not None:
-            cluster = client.cluster if args.dask == "local" else None
-            client.close()
-            if cluster is not None:
-                cluster.close()
+        _close_client(args, client)
     z0, z1 = pyramid.zooms
     per = ", ".join(f"{z}: {n}" for z, n in pyramid.tiles.items())
     print(

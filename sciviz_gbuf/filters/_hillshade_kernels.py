@@ -240,6 +240,20 @@ def _atan2(y: np.float32, x: np.float32) -> np.float32:
 
 
 @njit(cache=True, inline="always")
+def _gradient(zn: np.ndarray, zc: np.ndarray, zs: np.ndarray, j: int, cw: np.float32) -> tuple:
+    """GDAL's 3x3 gradient sums at column ``j`` of the rows north, centre and south, in its
+    order of float32 additions: Horn (``cw`` = 1) or Zevenbergen & Thorne (0: its terms drop
+    out exactly)."""
+    gx = (cw * zn[j - 1] + zc[j - 1] + cw * zc[j - 1] + cw * zs[j - 1]) - (
+        cw * zn[j + 1] + zc[j + 1] + cw * zc[j + 1] + cw * zs[j + 1]
+    )
+    gy = (cw * zs[j - 1] + zs[j] + cw * zs[j] + cw * zs[j + 1]) - (
+        cw * zn[j - 1] + zn[j] + cw * zn[j] + cw * zn[j + 1]
+    )
+    return gx, gy
+
+
+@njit(cache=True, inline="always")
 def _clamp01(s: np.float32) -> np.float32:
     """``s`` clamped to [0, 1], NaN kept (``min``/``max`` may drop it)."""
     return np.float32(0) if s < np.float32(0) else (np.float32(1) if s > np.float32(1) else s)
@@ -305,12 +319,7 @@ def _hillshade_rows(
         bad = False
         if variant == 0:
             for j in range(1, w - 1):
-                gx = (cw * zn[j - 1] + zc[j - 1] + cw * zc[j - 1] + cw * zs[j - 1]) - (
-                    cw * zn[j + 1] + zc[j + 1] + cw * zc[j + 1] + cw * zs[j + 1]
-                )
-                gy = (cw * zs[j - 1] + zs[j] + cw * zs[j] + cw * zs[j + 1]) - (
-                    cw * zn[j - 1] + zn[j] + cw * zn[j] + cw * zn[j + 1]
-                )
+                gx, gy = _gradient(zn, zc, zs, j, cw)
                 x = gx * ex
                 y = gy * ny
                 slope = sq * (x * x + y * y)
@@ -321,12 +330,7 @@ def _hillshade_rows(
                 o[j] = _clamp01(s)
         elif variant == 1:  # -combined
             for j in range(1, w - 1):
-                gx = (cw * zn[j - 1] + zc[j - 1] + cw * zc[j - 1] + cw * zs[j - 1]) - (
-                    cw * zn[j + 1] + zc[j + 1] + cw * zc[j + 1] + cw * zs[j + 1]
-                )
-                gy = (cw * zs[j - 1] + zs[j] + cw * zs[j] + cw * zs[j + 1]) - (
-                    cw * zn[j - 1] + zn[j] + cw * zn[j] + cw * zn[j + 1]
-                )
+                gx, gy = _gradient(zn, zc, zs, j, cw)
                 x = gx * ex
                 y = gy * ny
                 slope = sq * (x * x + y * y)
@@ -339,12 +343,7 @@ def _hillshade_rows(
                 o[j] = _clamp01(s)
         elif variant == 2:  # -multidirectional (Mark 1992)
             for j in range(1, w - 1):
-                gx = (cw * zn[j - 1] + zc[j - 1] + cw * zc[j - 1] + cw * zs[j - 1]) - (
-                    cw * zn[j + 1] + zc[j + 1] + cw * zc[j + 1] + cw * zs[j + 1]
-                )
-                gy = (cw * zs[j - 1] + zs[j] + cw * zs[j] + cw * zs[j + 1]) - (
-                    cw * zn[j - 1] + zn[j] + cw * zn[j] + cw * zn[j + 1]
-                )
+                gx, gy = _gradient(zn, zc, zs, j, cw)
                 x = gx * ex
                 y = gy * ny
                 xx = x * x + y * y
@@ -362,12 +361,7 @@ def _hillshade_rows(
                 o[j] = _clamp01(s)
         else:  # -igor
             for j in range(1, w - 1):
-                gx = (cw * zn[j - 1] + zc[j - 1] + cw * zc[j - 1] + cw * zs[j - 1]) - (
-                    cw * zn[j + 1] + zc[j + 1] + cw * zc[j + 1] + cw * zs[j + 1]
-                )
-                gy = (cw * zs[j - 1] + zs[j] + cw * zs[j] + cw * zs[j + 1]) - (
-                    cw * zn[j - 1] + zn[j] + cw * zn[j] + cw * zn[j + 1]
-                )
+                gx, gy = _gradient(zn, zc, zs, j, cw)
                 x = gx * ex
                 y = gy * ny
                 xx = x * x + y * y

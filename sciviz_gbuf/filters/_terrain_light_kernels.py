@@ -528,55 +528,32 @@ def _horizon_row(
                 break
 
 
-def sky_view_kernel(
-    z: np.ndarray,
-    d_rows: np.ndarray,
-    d_cols: np.ndarray,
-    step_lens: np.ndarray,
-    row_ubs: np.ndarray,
-    col_ubs: np.ndarray,
-    row_which: np.ndarray,
-    col_which: np.ndarray,
-    local_ub: np.ndarray | None,
-    radius: float,
-) -> np.ndarray:
+def _row_march(z: np.ndarray, rays: tuple, mode: int) -> np.ndarray:
+    """``mode`` 0 (sky-view factor) or 1 (positive openness) of every cell of ``z`` by the row
+    march; ``rays`` the arguments of the reference kernels after ``z`` (its ``local_ub``,
+    the per-cell bound, is not used and may be None)."""
+    d_rows, d_cols, step_lens, row_ubs, col_ubs, row_which, col_which, _, radius = rays
+    h, w = z.shape
+    out = np.empty((h, w), dtype=np.float32)
+    max_steps = _march_steps(step_lens, radius, h, w)
+    run_bands(
+        _sky_rows, h, z, d_rows, d_cols, step_lens, row_ubs, col_ubs, row_which, col_which,
+        max_steps, mode, out,
+        scratch=lambda: (np.empty(w, np.float32), np.empty(w, np.int64), np.empty(w)),
+    )  # fmt: skip
+    return out
+
+
+def sky_view_kernel(z: np.ndarray, *rays: object) -> np.ndarray:
     """Sky-view factor of every cell of ``z``, row by row (:func:`_horizon_row`); the
-    arguments of :func:`sky_view_reference_kernel` (``local_ub``, its per-cell bound, is not
-    used and may be None)."""
-    h, w = z.shape
-    out = np.empty((h, w), dtype=np.float32)
-    max_steps = _march_steps(step_lens, radius, h, w)
-    run_bands(
-        _sky_rows, h, z, d_rows, d_cols, step_lens, row_ubs, col_ubs, row_which, col_which,
-        max_steps, 0, out,
-        scratch=lambda: (np.empty(w, np.float32), np.empty(w, np.int64), np.empty(w)),
-    )  # fmt: skip
-    return out
+    arguments of :func:`sky_view_reference_kernel`."""
+    return _row_march(z, rays, 0)
 
 
-def openness_kernel(
-    z: np.ndarray,
-    d_rows: np.ndarray,
-    d_cols: np.ndarray,
-    step_lens: np.ndarray,
-    row_ubs: np.ndarray,
-    col_ubs: np.ndarray,
-    row_which: np.ndarray,
-    col_which: np.ndarray,
-    local_ub: np.ndarray | None,
-    radius: float,
-) -> np.ndarray:
-    """Positive openness of every cell of ``z``, row by row (:func:`_horizon_row`); as
-    :func:`openness_reference_kernel` (``local_ub`` not used, may be None)."""
-    h, w = z.shape
-    out = np.empty((h, w), dtype=np.float32)
-    max_steps = _march_steps(step_lens, radius, h, w)
-    run_bands(
-        _sky_rows, h, z, d_rows, d_cols, step_lens, row_ubs, col_ubs, row_which, col_which,
-        max_steps, 1, out,
-        scratch=lambda: (np.empty(w, np.float32), np.empty(w, np.int64), np.empty(w)),
-    )  # fmt: skip
-    return out
+def openness_kernel(z: np.ndarray, *rays: object) -> np.ndarray:
+    """Positive openness of every cell of ``z``, row by row (:func:`_horizon_row`); the
+    arguments of :func:`openness_reference_kernel`."""
+    return _row_march(z, rays, 1)
 
 
 @njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
