@@ -51,6 +51,7 @@ import numpy as np
 from scipy import ndimage
 
 from . import _contour_kernels as _k
+from . import _smooth_kernels as _sk
 
 #: Line spacing (px) up to which the field is left as it is: steep ground keeps exact lines.
 STEEP_SPACING = 3.0
@@ -92,7 +93,16 @@ def _pass(a: np.ndarray, w: np.ndarray, axis: int) -> np.ndarray:
 def local_linear(z: np.ndarray, valid: np.ndarray, sigma: float):
     """``(a, b, c)``: at each cell the Gaussian-weighted least-squares plane
     ``a + b dx + c dy`` of the valid cells around it (offsets in cells, x = column, y = row);
-    where fewer than three cells span a plane, the weighted mean and no slope."""
+    where fewer than three cells span a plane, the weighted mean and no slope. The numba
+    kernel (:func:`._smooth_kernels.local_linear_kernel`); :func:`local_linear_reference`
+    is the same with scipy's passes."""
+    g, gd, gdd = _kernels(sigma)
+    return _sk.local_linear_kernel(z, valid, g, gd, gdd, sigma)
+
+
+def local_linear_reference(z: np.ndarray, valid: np.ndarray, sigma: float):
+    """:func:`local_linear` by fourteen ``scipy.ndimage.correlate1d`` passes over the grid
+    (the plain statement the kernel is tested against)."""
     v = valid.astype(np.float64)
     vz = np.where(valid, z, 0.0).astype(np.float64)
     g, gd, gdd = _kernels(sigma)
