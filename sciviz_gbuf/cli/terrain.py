@@ -764,7 +764,7 @@ def add_topo(sub) -> None:
     shade.add_argument("--no-relief", action="store_true", help="no relief shading")
     p.add_argument("--shadows", action="store_true", help="darken cast shadows")
     p.add_argument(
-        "--sky-view", action="store_true", help="darken cells that see less sky (slow: ~1 MPix/s)"
+        "--sky-view", action="store_true", help="darken cells that see less sky (~15 MPix/s)"
     )
     p.add_argument(
         "--labels",
