@@ -266,7 +266,7 @@ def _sky_view_rows(
     max_steps: np.ndarray,
     out: np.ndarray,
 ) -> None:
-    """Rows ``i0 .. i1`` of :func:`sky_view_kernel` into ``out`` (one band of
+    """Rows ``i0 .. i1`` of :func:`sky_view_reference_kernel` into ``out`` (one band of
     :func:`.run_bands`); ``max_steps`` are the steps of each direction within the radius."""
     w = z.shape[1]
     n = d_rows.shape[0]
@@ -338,7 +338,7 @@ def _openness_rows(
     max_steps: np.ndarray,
     out: np.ndarray,
 ) -> None:
-    """Rows ``i0 .. i1`` of :func:`openness_kernel` into ``out`` (one band of
+    """Rows ``i0 .. i1`` of :func:`openness_reference_kernel` into ``out`` (one band of
     :func:`.run_bands`)."""
     w = z.shape[1]
     n = d_rows.shape[0]
