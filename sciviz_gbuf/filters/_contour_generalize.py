@@ -163,7 +163,28 @@ def smooth_strip(
     The gradient is that of the same blend of fits but at least ``SIGMA_GRADIENT`` wide: it
     sets the lines' widths and where minors fade for crowding (Eq. 15), and a gradient that
     flickers with the height noise of steep ground would make the fade flicker into dashes
-    (positions are those of the field alone, so they do not move)."""
+    (positions are those of the field alone, so they do not move).
+
+    The fits by :func:`local_linear`, then the blend, the tolerance band and the flat test in
+    one pass per cell (:func:`._smooth_kernels.blend_kernel`); the same values as
+    :func:`smooth_strip_reference`, the array statement (tested bit for bit)."""
+    z64 = np.ascontiguousarray(z, dtype=np.float64)
+    fits = np.empty((3 * (len(SIGMAS) - 1), *z.shape), np.float64)
+    for k, s in enumerate(SIGMAS[1:]):
+        g, gd, gdd = _kernels(s)
+        _sk.local_linear_kernel(z64, valid, g, gd, gdd, s, out=fits[3 * k : 3 * k + 3])
+    # the kernel blends the fits at the widths of SIGMAS = (0, 1, 2, 4), SIGMA_SLOPE = 1
+    return _sk.blend_kernel(
+        z64, valid, fits, interval, per_px=SIGMA_PER_PX, steep=STEEP_SPACING,
+        sigma_max=SIGMA_MAX, sigma_grad=SIGMA_GRADIENT, displace=DISPLACE_MAX,
+    )  # fmt: skip
+
+
+def smooth_strip_reference(
+    z: np.ndarray, valid: np.ndarray, interval: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`smooth_strip` by numpy expressions over the strip (the plain statement of the
+    blend, the tolerance band and the flat test that the kernel is tested against)."""
     z64 = z.astype(np.float64)
     fits = {s: local_linear(z64, valid, s) for s in SIGMAS[1:]}
     _, b, c = fits[SIGMA_SLOPE]  # one of SIGMAS
