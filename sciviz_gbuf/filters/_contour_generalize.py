@@ -141,21 +141,23 @@ def smooth_field(
 ) -> tuple[np.ndarray, np.ndarray]:
     """:func:`smooth_strip` strip by strip of ``STRIP_ROWS`` rows (each read with
     ``SMOOTH_RADIUS`` rows around it: the same values as in one piece, bounded memory)."""
-    h = z.shape[0]
+    h, w = z.shape
     if h <= STRIP_ROWS + 2 * SMOOTH_RADIUS:
         return smooth_strip(z, valid, interval)
     out = np.empty(z.shape, np.float32)
     grad = np.empty(z.shape, np.float32)
+    # one working memory for every strip (its first touch costs more than the sums)
+    work = np.empty(14 * (STRIP_ROWS + 2 * SMOOTH_RADIUS) * w, np.float64)
     for a in range(0, h, STRIP_ROWS):
         b = min(a + STRIP_ROWS, h)
         lo, hi = max(0, a - SMOOTH_RADIUS), min(h, b + SMOOTH_RADIUS)
-        zs, gs = smooth_strip(z[lo:hi], valid[lo:hi], interval)
+        zs, gs = smooth_strip(z[lo:hi], valid[lo:hi], interval, work=work)
         out[a:b], grad[a:b] = zs[a - lo : b - lo], gs[a - lo : b - lo]
     return out, grad
 
 
 def smooth_strip(
-    z: np.ndarray, valid: np.ndarray, interval: float
+    z: np.ndarray, valid: np.ndarray, interval: float, work: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
     """The field smoothed as the local line spacing ``interval / g`` asks (module docstring)
     and its gradient magnitude (per cell), both float32 and NaN where not ``valid``.
@@ -167,12 +169,18 @@ def smooth_strip(
 
     The fits by :func:`local_linear`, then the blend, the tolerance band and the flat test in
     one pass per cell (:func:`._smooth_kernels.blend_kernel`); the same values as
-    :func:`smooth_strip_reference`, the array statement (tested bit for bit)."""
+    :func:`smooth_strip_reference`, the array statement (tested bit for bit). ``work``: an
+    optional flat float64 buffer of at least ``14 H W`` to compute in."""
     z64 = np.ascontiguousarray(z, dtype=np.float64)
-    fits = np.empty((3 * (len(SIGMAS) - 1), *z.shape), np.float64)
+    n = z.size
+    nfit = 3 * (len(SIGMAS) - 1)
+    if work is None:
+        work = np.empty((nfit + 5) * n, np.float64)
+    fits = work[: nfit * n].reshape(nfit, *z.shape)
     for k, s in enumerate(SIGMAS[1:]):
         g, gd, gdd = _kernels(s)
-        _sk.local_linear_kernel(z64, valid, g, gd, gdd, s, out=fits[3 * k : 3 * k + 3])
+        _sk.local_linear_kernel(z64, valid, g, gd, gdd, s, out=fits[3 * k : 3 * k + 3],
+                                work=work[nfit * n :])  # fmt: skip
     # the kernel blends the fits at the widths of SIGMAS = (0, 1, 2, 4), SIGMA_SLOPE = 1
     return _sk.blend_kernel(
         z64, valid, fits, interval, per_px=SIGMA_PER_PX, steep=STEEP_SPACING,

@@ -25,94 +25,164 @@ __all__ = ["blend_kernel", "local_linear_kernel"]
 
 def local_linear_kernel(
     z: np.ndarray, valid: np.ndarray, g: np.ndarray, gd: np.ndarray, gdd: np.ndarray,
-    sigma: float, out: np.ndarray | None = None,
+    sigma: float, out: np.ndarray | None = None, work: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
     """``(a, b, c)`` float64: at each cell the least-squares plane ``a + b dx + c dy`` of the
     valid cells around it, weighted ``g(dx) g(dy)`` (taps ``g``, ``g d``, ``g d^2`` of one
     Gaussian, odd length); the weighted mean and no slope where fewer cells span no plane.
-    ``out``: an optional (3, H, W) C-contiguous float64 array to write them into."""
+    ``out``: an optional (3, H, W) C-contiguous float64 array to write them into; ``work``:
+    an optional flat float64 buffer of at least ``5 H W`` for the x-passes (a caller that
+    fits strip after strip reuses its memory: fresh memory costs more to touch than the
+    sums).
+
+    The six moments of the valid mask are the same at every cell whose whole window is valid
+    and inside the grid (most of a DEM): there they are computed once, from a row of ones by
+    the same loops, and only the three moments of the heights are summed per cell; rows
+    without nodata copy their mask moments from that row. A cell's path depends on its window
+    alone, so chunks of a grid still agree with the whole bit for bit."""
     h, w = z.shape
+    r = g.shape[0] // 2
     zc = np.ascontiguousarray(z, dtype=np.float64)
     vc = np.ascontiguousarray(valid, dtype=np.bool_)
-    xs = np.empty((5, h, w), np.float64)
-    run_bands(_x_rows, h, zc, vc, g, gd, gdd, xs,
+    # the mask moments of a row of ones (x-passes) and of a full window (y-passes)
+    full_x = np.empty((5, 1, w), np.float64)
+    _x_rows(0, 1, np.zeros((1, w)), np.ones((1, w), np.bool_), g, gd, gdd, full_x,
+            np.zeros((3, w)), np.zeros(1, np.bool_), np.empty(w), np.empty(w))  # fmt: skip
+    full_y = np.zeros(6, np.float64)
+    if w > 2 * r:
+        # the y-sums of _v_taps over a full window, in its order (IEEE sums: the same bits)
+        x0, x1, x2 = (float(full_x[f, 0, r]) for f in range(3))
+        m = [0.0] * 6
+        for t in range(2 * r + 1):
+            m[0] += float(g[t]) * x0
+            m[1] += float(gd[t]) * x0
+            m[2] += float(gdd[t]) * x0
+            m[3] += float(g[t]) * x1
+            m[4] += float(gd[t]) * x1
+            m[5] += float(g[t]) * x2
+        full_y[:] = m
+    row_ok = np.ascontiguousarray(vc.all(axis=1))
+    if work is None:
+        work = np.empty(5 * h * w, np.float64)
+    xs = work[: 5 * h * w].reshape(5, h, w)
+    run_bands(_x_rows, h, zc, vc, g, gd, gdd, xs, full_x[:3, 0], row_ok,
               scratch=lambda: (np.empty(w), np.empty(w)))  # fmt: skip
     if out is None:
         out = np.empty((3, h, w), np.float64)
     a, b, c = out[0], out[1], out[2]
-    run_bands(_y_rows, h, xs, g, gd, gdd, float(sigma), a, b, c,
-              scratch=lambda: (np.empty((9, w)),))  # fmt: skip
+    run_bands(_y_rows, h, xs, vc, g, gd, gdd, float(sigma), full_y, a, b, c,
+              scratch=lambda: (np.empty((9, w)), np.empty(w, np.int32),
+                               np.empty(w + 1, np.int32)))  # fmt: skip
     return a, b, c
 
 
 @njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
-def _taps5(
-    o0: np.ndarray, o1: np.ndarray, o2: np.ndarray, o3: np.ndarray, o4: np.ndarray,
-    v: np.ndarray, vz: np.ndarray, wg: float, wd: float, wdd: float,
-) -> None:  # fmt: skip
+def _taps3(o0: np.ndarray, o1: np.ndarray, o2: np.ndarray, x: np.ndarray, w0: float,
+           w1: float, w2: float) -> None:  # fmt: skip
     for j in range(o0.shape[0]):
-        o0[j] += wg * v[j]
-        o1[j] += wd * v[j]
-        o2[j] += wdd * v[j]
-        o3[j] += wg * vz[j]
-        o4[j] += wd * vz[j]
+        o0[j] += w0 * x[j]
+        o1[j] += w1 * x[j]
+        o2[j] += w2 * x[j]
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _taps1(o0: np.ndarray, x: np.ndarray, w0: float) -> None:
+    for j in range(o0.shape[0]):
+        o0[j] += w0 * x[j]
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _taps2(o0: np.ndarray, o1: np.ndarray, x: np.ndarray, w0: float, w1: float) -> None:
+    for j in range(o0.shape[0]):
+        o0[j] += w0 * x[j]
+        o1[j] += w1 * x[j]
 
 
 @njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
 def _x_rows(
     i0: int, i1: int, z: np.ndarray, valid: np.ndarray, g: np.ndarray, gd: np.ndarray,
-    gdd: np.ndarray, xs: np.ndarray, v: np.ndarray, vz: np.ndarray,
+    gdd: np.ndarray, xs: np.ndarray, full: np.ndarray, row_ok: np.ndarray, v: np.ndarray,
+    vz: np.ndarray,
 ) -> None:  # fmt: skip
     """Rows ``i0 .. i1`` of the x-passes: ``xs[0..2]`` of ``v`` with ``g``, ``g d``,
-    ``g d^2``; ``xs[3..4]`` of ``v z`` with ``g``, ``g d``."""
+    ``g d^2``; ``xs[3..4]`` of ``v z`` with ``g``, ``g d``. A row without nodata
+    (``row_ok``) copies ``xs[0..2]`` from ``full``, the same sums of a row of ones."""
     w = z.shape[1]
     r = g.shape[0] // 2
     for i in range(i0, i1):
+        ok_row = row_ok[i]
         for j in range(w):
             ok = valid[i, j]
             v[j] = 1.0 if ok else 0.0
             vz[j] = z[i, j] if ok else 0.0
-            for f in range(5):
-                xs[f, i, j] = 0.0
+            xs[3, i, j] = 0.0
+            xs[4, i, j] = 0.0
+        if ok_row:
+            for f in range(3):
+                for j in range(w):
+                    xs[f, i, j] = full[f, j]
+        else:
+            for f in range(3):
+                for j in range(w):
+                    xs[f, i, j] = 0.0
         for t in range(2 * r + 1):
             off = t - r
             lo = max(0, -off)
             hi = min(w, w - off)
             if lo >= hi:
                 continue
-            _taps5(xs[0, i, lo:hi], xs[1, i, lo:hi], xs[2, i, lo:hi], xs[3, i, lo:hi],
-                   xs[4, i, lo:hi], v[lo + off : hi + off], vz[lo + off : hi + off], g[t],
-                   gd[t], gdd[t])  # fmt: skip
+            if not ok_row:
+                _taps3(xs[0, i, lo:hi], xs[1, i, lo:hi], xs[2, i, lo:hi],
+                       v[lo + off : hi + off], g[t], gd[t], gdd[t])  # fmt: skip
+            _taps2(xs[3, i, lo:hi], xs[4, i, lo:hi], vz[lo + off : hi + off], g[t], gd[t])
 
 
 @njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
-def _taps9(acc: np.ndarray, x0: np.ndarray, x1: np.ndarray, x2: np.ndarray, x3: np.ndarray,
-           x4: np.ndarray, wg: float, wd: float, wdd: float) -> None:  # fmt: skip
-    a0, a1, a2 = acc[0], acc[1], acc[2]
-    a3, a4, a5 = acc[3], acc[4], acc[5]
-    a6, a7, a8 = acc[6], acc[7], acc[8]
-    for j in range(x0.shape[0]):
-        a0[j] += wg * x0[j]  # m0
-        a1[j] += wd * x0[j]  # my
-        a2[j] += wdd * x0[j]  # myy
-        a3[j] += wg * x1[j]  # mx
-        a4[j] += wd * x1[j]  # mxy
-        a5[j] += wg * x2[j]  # mxx
-        a6[j] += wg * x3[j]  # mz
-        a7[j] += wd * x3[j]  # myz
-        a8[j] += wg * x4[j]  # mxz
+def _v_taps(acc: np.ndarray, xs: np.ndarray, i: int, g: np.ndarray, gd: np.ndarray,
+            gdd: np.ndarray) -> None:  # fmt: skip
+    """The y-passes of the six mask moments of row ``i`` into ``acc[0..5]`` (zeroed by the
+    caller), over the columns of ``xs`` (a view of the span)."""
+    h = xs.shape[1]
+    r = g.shape[0] // 2
+    for t in range(2 * r + 1):
+        row = i + t - r
+        if row < 0 or row >= h:
+            continue
+        _taps3(acc[0], acc[1], acc[2], xs[0, row], g[t], gd[t], gdd[t])  # m0, my, myy
+        _taps2(acc[3], acc[4], xs[1, row], g[t], gd[t])  # mx, mxy
+        _taps1(acc[5], xs[2, row], g[t])  # mxx
 
 
 @njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
 def _y_rows(
-    i0: int, i1: int, xs: np.ndarray, g: np.ndarray, gd: np.ndarray, gdd: np.ndarray,
-    sigma: float, a: np.ndarray, b: np.ndarray, c: np.ndarray, acc: np.ndarray,
+    i0: int, i1: int, xs: np.ndarray, valid: np.ndarray, g: np.ndarray, gd: np.ndarray,
+    gdd: np.ndarray, sigma: float, full: np.ndarray, a: np.ndarray, b: np.ndarray,
+    c: np.ndarray, acc: np.ndarray, bad: np.ndarray, run: np.ndarray,
 ) -> None:  # fmt: skip
-    """Rows ``i0 .. i1`` of the y-passes of the moments and the plane's solution."""
+    """Rows ``i0 .. i1`` of the y-passes of the moments and the plane's solution.
+
+    ``bad[j]``: the cells of column ``j`` in the row's window that are nodata or outside the
+    grid (kept row to row); a cell with no such cell within ``r`` columns (and ``r`` cells
+    from the grid's sides) takes the mask moments ``full``, the others sum them in runs."""
     h, w = xs.shape[1], xs.shape[2]
     r = g.shape[0] // 2
     s4 = 1e-3 * sigma**4
+    for j in range(w):
+        bad[j] = 0
+        for row in range(i0 - r, i0 + r + 1):
+            if row < 0 or row >= h or not valid[row, j]:
+                bad[j] += 1
     for i in range(i0, i1):
+        if i > i0:  # slide the window one row down
+            for j in range(w):
+                out_row = i - r - 1
+                in_row = i + r
+                bad[j] -= 1 if out_row < 0 or not valid[out_row, j] else 0
+                bad[j] += 1 if in_row >= h or not valid[in_row, j] else 0
+        # run[j]: columns before j with a bad window column (a prefix count)
+        run[0] = 0
+        for j in range(w):
+            run[j + 1] = run[j] + (1 if bad[j] > 0 else 0)
         for f in range(9):
             for j in range(w):
                 acc[f, j] = 0.0
@@ -120,8 +190,28 @@ def _y_rows(
             row = i + t - r
             if row < 0 or row >= h:
                 continue
-            _taps9(acc, xs[0, row], xs[1, row], xs[2, row], xs[3, row], xs[4, row], g[t],
-                   gd[t], gdd[t])  # fmt: skip
+            _taps2(acc[6], acc[7], xs[3, row], g[t], gd[t])  # mz, myz
+            _taps1(acc[8], xs[4, row], g[t])  # mxz
+        # the mask moments: constants where the window is full, summed over runs elsewhere
+        j = 0
+        while j < w:
+            jl = max(j - r, 0)
+            jh = min(j + r + 1, w)
+            full_here = j >= r and j < w - r and run[jh] - run[jl] == 0
+            k = j + 1
+            while k < w:
+                kl = max(k - r, 0)
+                kh = min(k + r + 1, w)
+                if (k >= r and k < w - r and run[kh] - run[kl] == 0) != full_here:
+                    break
+                k += 1
+            if full_here:
+                for f in range(6):
+                    for q in range(j, k):
+                        acc[f, q] = full[f]
+            else:
+                _v_taps(acc[:, j:k], xs[:, :, j:k], i, g, gd, gdd)
+            j = k
         for j in range(w):
             m0, my, myy, mx, mxy = acc[0, j], acc[1, j], acc[2, j], acc[3, j], acc[4, j]
             mxx, mz, myz, mxz = acc[5, j], acc[6, j], acc[7, j], acc[8, j]
