@@ -88,6 +88,7 @@ def run_bands(
     n: int,
     *args: object,
     scratch: Callable[[], tuple[object, ...]] | None = None,
+    min_items: int = MIN_ITEMS_PER_BAND,
 ) -> None:
     """Call ``kernel(i0, i1, *args)`` on bands ``[i0, i1)`` covering ``range(n)``, at once.
 
@@ -104,6 +105,8 @@ def run_bands(
         Called once per band; the arrays it returns are appended to that band's arguments,
         a working space of its own. The kernels are compiled without numba's reference
         counting (see the module notes), so they cannot allocate.
+    min_items : int, default: MIN_ITEMS_PER_BAND
+        The fewest items worth a band of their own (1 for items that are strips of rows).
 
     Notes
     -----
@@ -113,7 +116,7 @@ def run_bands(
     n = int(n)
     if n <= 0:
         return
-    parts = min(threads(), max(1, n // MIN_ITEMS_PER_BAND))
+    parts = min(threads(), max(1, n // max(1, int(min_items))))
 
     def band_args() -> tuple[object, ...]:
         return args if scratch is None else (*args, *scratch())

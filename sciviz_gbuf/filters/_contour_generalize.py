@@ -50,6 +50,7 @@ import math
 import numpy as np
 from scipy import ndimage
 
+from ..core.bands import run_bands
 from . import _contour_kernels as _k
 from . import _smooth_kernels as _sk
 
@@ -177,15 +178,31 @@ def smooth_strip(
     if work is None:
         work = np.empty((nfit + 5) * n, np.float64)
     fits = work[: nfit * n].reshape(nfit, *z.shape)
+    widest = SIGMA_MAX
     for k, s in enumerate(SIGMAS[1:]):
+        if s > SIGMA_SLOPE and SIGMAS[k] >= widest:
+            break  # no cell of the strip asks for this width (its fit would not be read)
         g, gd, gdd = _kernels(s)
         _sk.local_linear_kernel(z64, valid, g, gd, gdd, s, out=fits[3 * k : 3 * k + 3],
                                 work=work[nfit * n :])  # fmt: skip
+        if s == SIGMA_SLOPE:
+            widest = _widest_sigma(fits[3 * k + 1], fits[3 * k + 2], valid, interval)
     # the kernel blends the fits at the widths of SIGMAS = (0, 1, 2, 4), SIGMA_SLOPE = 1
     return _sk.blend_kernel(
         z64, valid, fits, interval, per_px=SIGMA_PER_PX, steep=STEEP_SPACING,
         sigma_max=SIGMA_MAX, sigma_grad=SIGMA_GRADIENT, displace=DISPLACE_MAX,
     )  # fmt: skip
+
+
+def _widest_sigma(b: np.ndarray, c: np.ndarray, valid: np.ndarray, interval: float) -> float:
+    """The widest smoothing any valid cell asks for, from the slope fit ``(b, c)``: the
+    width grows as the gradient falls, so it is that of the least gradient (as the blend
+    kernel computes it)."""
+    if not valid.any():
+        return 0.0
+    g = float(np.min(np.hypot(b, c), where=valid, initial=np.inf))
+    spacing = interval / g if g > 0.0 else math.inf
+    return min(max(SIGMA_PER_PX * (spacing - STEEP_SPACING), 0.0), SIGMA_MAX)
 
 
 def smooth_strip_reference(
@@ -281,11 +298,16 @@ def drop_small_rings(
     if h <= STRIP_ROWS + 2 * margin:
         return ring_opening(ink, cut, min_ring, min_stub)
     out = np.empty_like(ink)
-    for a in range(0, h, STRIP_ROWS):
-        b = min(a + STRIP_ROWS, h)
-        lo, hi = max(0, a - margin), min(h, b + margin)
-        part = ring_opening(ink[lo:hi], cut[lo:hi], min_ring, min_stub)
-        out[a:b] = part[a - lo : b - lo]
+
+    def strips(k0: int, k1: int) -> None:
+        for a in range(k0 * STRIP_ROWS, min(k1 * STRIP_ROWS, h), STRIP_ROWS):
+            b = min(a + STRIP_ROWS, h)
+            lo, hi = max(0, a - margin), min(h, b + margin)
+            part = ring_opening(ink[lo:hi], cut[lo:hi], min_ring, min_stub)
+            out[a:b] = part[a - lo : b - lo]
+
+    # strips at once on every core (the kernel releases the GIL; each writes its own rows)
+    run_bands(strips, -(-h // STRIP_ROWS), min_items=1)
     return out
 
 
@@ -300,21 +322,107 @@ def ring_opening(ink: np.ndarray, cut: np.ndarray, min_ring: float, min_stub: fl
     order = inked[np.argsort(-flat[inked], kind="stable")].astype(np.int32)
     node = np.full(ink.shape, -1, np.int32)
     node.ravel()[order] = np.arange(order.size, dtype=np.int32)
-    return _k.ring_opening(
-        ink, node, order, np.ascontiguousarray(cut), np.float32(min_ring), np.float32(min_stub)
-    )
+    m = order.size
+    out = np.empty(ink.shape, np.float32)
+    _k.ring_opening(ink, node, order, np.ascontiguousarray(cut), np.float32(min_ring),
+                    np.float32(min_stub), np.empty(m, np.int32), np.empty(m, np.int32),
+                    np.empty(m, np.float32), np.empty(m, np.float32), np.empty((4, m), np.int32),
+                    np.empty(m, np.bool_), np.empty(m, np.float32), out)  # fmt: skip
+    return out
 
 
-def band_heights(z: np.ndarray, valid: np.ndarray, band_index, min_ring: float) -> np.ndarray:
+def band_heights(
+    z: np.ndarray, valid: np.ndarray, min_ring: float, *, base: float = 0.0, step: float = 1.0,
+    edges: np.ndarray | None = None,
+) -> np.ndarray:  # fmt: skip
     """Heights for colour bands that agree with generalised contour lines: ``z`` where every
-    band island, an 8-connected piece of one band (``band_index(heights)``, integers) whose
+    band island, an 8-connected piece of one band (``floor((z - base) / step)`` in float32,
+    or with ``edges`` the number of edges <= ``z``) whose
     bounding box is at most ``min_ring`` px on its longer side and which touches neither the
-    grid's edge nor a cell that is not ``valid``, takes the height of the nearest cell outside
-    it, so the islands whose rings the lines drop (:func:`drop_small_rings`) are not left as
-    specks of colour. Elsewhere the heights are kept: their band edges are the exact lines,
-    which the generalised lines follow within ``DISPLACE_MAX`` px, under a line's width.
-    Float32, NaN where not ``valid``. Local: a halo of ``ceil(min_ring) + 1`` gives the same
-    cells chunk by chunk."""
+    grid's edge nor a cell that is not ``valid``, takes the height of the nearest valid cell
+    outside the islands, so the islands whose rings the lines drop (:func:`drop_small_rings`)
+    are not left as specks of colour. Elsewhere the heights are kept: their band edges are
+    the exact lines, which the generalised lines follow within ``DISPLACE_MAX`` px, under a
+    line's width. Float32, NaN where not ``valid``.
+
+    The islands by run-length labelling, the nearest cells by a search within
+    ``m = ceil(min_ring) + 1`` cells (:func:`~._contour_kernels.small_islands`,
+    :func:`~._contour_kernels.fill_from_nearest`; :func:`band_heights_reference` is the
+    statement with ``scipy.ndimage``). An island lies within ``min_ring`` cells of each of its
+    cells, so a cell's island and the cells it is filled from are decided within ``2 m``
+    cells: row strips (bounded memory) and chunks read with that halo give the same cells
+    as one piece. (A chain of touching islands of several bands wider than ``m`` keeps the
+    heights of cells farther than ``m`` from the cells around it.)"""
+    s = np.where(valid, z, np.nan).astype(np.float32)
+    if min_ring <= 0 or not valid.any():
+        return s
+    h = s.shape[0]
+    m = math.ceil(min_ring) + 1
+    halo = 2 * m
+    spec = (
+        np.float32(base),
+        np.float32(step),
+        np.empty(0) if edges is None else np.ascontiguousarray(edges, np.float64),
+    )
+    valid = np.ascontiguousarray(valid, bool)
+    if h <= STRIP_ROWS + 2 * halo:
+        return _band_strip(s, valid, spec, min_ring, m, 0, h)
+    out = np.empty_like(s)
+
+    def strips(k0: int, k1: int) -> None:
+        small = np.zeros((STRIP_ROWS + 2 * halo, s.shape[1]), bool)
+        for a in range(k0 * STRIP_ROWS, min(k1 * STRIP_ROWS, h), STRIP_ROWS):
+            b = min(a + STRIP_ROWS, h)
+            lo, hi = max(0, a - halo), min(h, b + halo)
+            _band_strip(s[lo:hi], valid[lo:hi], spec, min_ring, m, a - lo, b - lo,
+                        small=small[: hi - lo], out=out[a:b])  # fmt: skip
+
+    # strips at once on every core (the kernels release the GIL; each writes its own rows)
+    run_bands(strips, -(-h // STRIP_ROWS), min_items=1)
+    return out
+
+
+def _band_strip(
+    s: np.ndarray, valid: np.ndarray, spec: tuple, min_ring: float, m: int, r0: int, r1: int,
+    small: np.ndarray | None = None, out: np.ndarray | None = None,
+) -> np.ndarray:  # fmt: skip
+    """Rows ``r0 .. r1`` of :func:`band_heights` of a strip (its first and last rows count
+    as cut, like the grid's edge); ``small`` and ``out`` optional working and output arrays."""
+    if small is None:
+        small = np.zeros(s.shape, bool)
+    else:
+        small[...] = False
+    small_islands(s, valid, spec, min_ring, small)
+    if out is None:
+        out = np.empty((r1 - r0, s.shape[1]), np.float32)
+    _k.fill_from_nearest(s, small, valid, m, r0, r1, out)
+    return out
+
+
+def small_islands(
+    s: np.ndarray, valid: np.ndarray, spec: tuple, min_ring: float, small: np.ndarray
+) -> None:
+    """Mark the band islands of ``s`` in ``small`` (:func:`~._contour_kernels.small_islands`
+    over the runs of :func:`~._contour_kernels.band_runs`); ``spec``: ``(base, step, edges)``
+    as float32, float32 and float64 (no edges: bands every ``step`` from ``base``)."""
+    h = s.shape[0]
+    none = np.empty(0, np.int32)
+    n = _k.band_runs(s, valid, *spec, False, none, none, none, np.empty(0, np.int64), none)
+    rrow, rc0, rc1 = (np.empty(n, np.int32) for _ in range(3))
+    rband = np.empty(n, np.int64)
+    first = np.empty(h + 1, np.int32)
+    _k.band_runs(s, valid, *spec, True, rrow, rc0, rc1, rband, first)
+    _k.small_islands(valid, rrow, rc0, rc1, rband, first, np.float32(min_ring), small,
+                     np.empty(n, np.int32), np.empty((4, n), np.int32),
+                     np.empty(n, np.bool_))  # fmt: skip
+
+
+def band_heights_reference(
+    z: np.ndarray, valid: np.ndarray, band_index, min_ring: float
+) -> np.ndarray:
+    """:func:`band_heights` with ``scipy.ndimage``: a labelling of the whole grid per band and
+    the nearest cell by the Euclidean distance transform (ties and chains of islands aside,
+    the same cells; the tests compare them)."""
     s = np.where(valid, z, np.nan).astype(np.float32)
     if min_ring <= 0 or not valid.any():
         return s

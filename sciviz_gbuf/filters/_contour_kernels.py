@@ -229,8 +229,9 @@ def _root(par, x):
     return x
 
 
-@njit(cache=True)
-def ring_opening(ink, node, order, cut, min_ring, min_stub):
+@njit(cache=True, nogil=True, _nrt=False)
+def ring_opening(ink, node, order, cut, min_ring, min_stub, par, up, at, big, box, touch, level,
+                 out):  # fmt: skip
     """The attribute opening of ``ink`` by the size of its 8-connected components: each pixel
     keeps ``min(ink, T)`` for the highest ``T`` at which its component of ``ink >= T`` is
     large, 0 if none is (Vincent 1993's area opening, with the attribute of
@@ -244,15 +245,16 @@ def ring_opening(ink, node, order, cut, min_ring, min_stub):
     level it happened at."""
     h, w = ink.shape
     m = order.shape[0]
-    par = np.arange(m).astype(np.int32)
-    up = np.full(m, -1, np.int32)  # the root a set merged into (-1: still a root)
-    at = np.zeros(m, np.float32)  # the level of that merge
-    big = np.full(m, np.float32(-1.0), np.float32)  # level where the set became large
-    r0 = np.empty(m, np.int32)
-    r1 = np.empty(m, np.int32)
-    c0 = np.empty(m, np.int32)
-    c1 = np.empty(m, np.int32)
-    touch = np.zeros(m, np.bool_)
+    # working arrays of the m inked pixels (numba's reference counting is off: the caller's):
+    # par, up (the root a set merged into, -1: still a root), at (the level of that merge),
+    # big (level where the set became large, -1), box (4, m) int32, touch, level; out (H, W)
+    r0, r1, c0, c1 = box[0], box[1], box[2], box[3]
+    for k in range(m):
+        par[k] = k
+        up[k] = -1
+        at[k] = np.float32(0.0)
+        big[k] = np.float32(-1.0)
+        touch[k] = False
     for k in range(m):
         p = order[k]
         pr, pc = p // w, p % w
@@ -279,8 +281,9 @@ def ring_opening(ink, node, order, cut, min_ring, min_stub):
         if ext > min_ring or (touch[k] and ext > min_stub):
             big[k] = v
     # Levels from the last set added back to the first: a set's parent was added after it.
-    out = np.zeros((h, w), np.float32)
-    level = np.zeros(m, np.float32)
+    for r in range(h):
+        for c in range(w):
+            out[r, c] = np.float32(0.0)
     for k in range(m - 1, -1, -1):
         if big[k] >= 0:
             lv = big[k]
@@ -292,4 +295,149 @@ def ring_opening(ink, node, order, cut, min_ring, min_stub):
         p = order[k]
         pr, pc = p // w, p % w
         out[pr, pc] = min(lv, ink[pr, pc])
-    return out
+
+
+# ------------------------------------------------------------ band islands (band_heights)
+@njit(cache=True, error_model="numpy")
+def _band_of(x, b0, step, edges):
+    """The band of height ``x``: ``floor((x - b0) / step)`` (float32, as numpy computes it
+    for a float32 grid), or with ``edges`` the count of edges <= ``x``."""
+    if edges.shape[0] == 0:
+        return np.int64(np.floor((x - b0) / step))
+    lo = 0
+    hi = edges.shape[0]
+    while lo < hi:  # bisection: the first edge > x (searchsorted side="right")
+        mid = (lo + hi) // 2
+        if edges[mid] <= x:
+            lo = mid + 1
+        else:
+            hi = mid
+    return np.int64(lo)
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def band_runs(z, valid, b0, step, edges, store, rrow, rc0, rc1, rband, first):
+    """The runs of a grid: maximal pieces of a row of valid cells of one band
+    (:func:`_band_of`); counted, and with ``store`` written (row, first and last column,
+    band; ``first[r]`` the first run of row ``r``, ``first[H]`` their number). Returns
+    their number."""
+    h, w = z.shape
+    n = 0
+    for r in range(h):
+        if store:
+            first[r] = n
+        c = 0
+        while c < w:
+            if not valid[r, c]:
+                c += 1
+                continue
+            b = _band_of(z[r, c], b0, step, edges)
+            e = c + 1
+            while e < w and valid[r, e] and _band_of(z[r, e], b0, step, edges) == b:
+                e += 1
+            if store:
+                rrow[n] = r
+                rc0[n] = c
+                rc1[n] = e - 1
+                rband[n] = b
+            n += 1
+            c = e
+    if store:
+        first[h] = n
+    return n
+
+
+@njit(cache=True, nogil=True, _nrt=False)
+def small_islands(valid, rrow, rc0, rc1, rband, first, min_ring, small, par, box, touch):
+    """Mark in ``small`` the band islands of :func:`._contour_generalize.band_heights`: the
+    8-connected pieces of one band over the ``valid`` cells whose bounding box is at most
+    ``min_ring`` px on its longer side and which touch neither the grid's edge nor a cell
+    that is not valid (8-connected).
+
+    Connected runs (Rosenfeld's run-length labelling) of :func:`band_runs`: each run joined
+    to the runs of the row above that overlap it or touch it diagonally and have its band
+    (union-find), then each piece's box and contact with the edge or nodata gathered over
+    its runs. ``par`` (n,), ``box`` (4, n) int32 and ``touch`` (n,) bool: working arrays of
+    the n runs."""
+    h, w = valid.shape
+    n = first[h]
+    for k in range(n):
+        par[k] = k
+        box[0, k] = h
+        box[1, k] = -1
+        box[2, k] = w
+        box[3, k] = -1
+        touch[k] = False
+    for r in range(1, h):
+        i = first[r - 1]
+        for k in range(first[r], first[r + 1]):
+            while i < first[r] and rc1[i] < rc0[k] - 1:
+                i += 1
+            j = i
+            while j < first[r] and rc0[j] <= rc1[k] + 1:
+                if rband[j] == rband[k]:
+                    a = _root(par, j)
+                    b = _root(par, k)
+                    if a != b:
+                        par[max(a, b)] = min(a, b)
+                j += 1
+    for k in range(n):
+        a = _root(par, k)
+        r = rrow[k]
+        box[0, a] = min(box[0, a], r)
+        box[1, a] = max(box[1, a], r)
+        box[2, a] = min(box[2, a], rc0[k])
+        box[3, a] = max(box[3, a], rc1[k])
+        if touch[a]:
+            continue
+        # the edge, or a cell that is not valid around the run
+        lo = rc0[k] - 1
+        hi = rc1[k] + 1
+        if r == 0 or r == h - 1 or lo < 0 or hi >= w:
+            touch[a] = True
+            continue
+        for rr in range(r - 1, r + 2):
+            for cc in range(lo, hi + 1):
+                if not valid[rr, cc]:
+                    touch[a] = True
+    for k in range(n):
+        a = _root(par, k)
+        ext = max(box[1, a] - box[0, a] + 1, box[3, a] - box[2, a] + 1)
+        if not touch[a] and ext <= min_ring:
+            for cc in range(rc0[k], rc1[k] + 1):
+                small[rrow[k], cc] = True
+
+
+@njit(cache=True, nogil=True, _nrt=False)
+def fill_from_nearest(s, small, valid, radius, r0, r1, out):
+    """``out[r0:r1]``: ``s`` of rows ``r0 .. r1``, where ``small`` the value of the nearest
+    cell (Euclidean, in cells) that is ``valid`` and not ``small``, within ``radius`` cells
+    along each axis; of equally near cells the first in raster order, so the result depends
+    on that window alone. A cell with none within reach keeps its value. The search runs
+    over square rings of growing radius and stops once a ring is farther than the best."""
+    h, w = s.shape
+    for r in range(r0, r1):
+        for c in range(w):
+            out[r - r0, c] = s[r, c]
+            if not small[r, c]:
+                continue
+            best = -1
+            bd = 2 * radius * radius + 1
+            for k in range(1, radius + 1):
+                if k * k > bd:
+                    break
+                for rr in range(r - k, r + k + 1):
+                    if rr < 0 or rr >= h:
+                        continue
+                    edge = rr == r - k or rr == r + k
+                    step = 1 if edge else 2 * k
+                    for cc in range(c - k, c + k + 1, step):
+                        if cc < 0 or cc >= w or not valid[rr, cc] or small[rr, cc]:
+                            continue
+                        d = (rr - r) * (rr - r) + (cc - c) * (cc - c)
+                        p = rr * w + cc
+                        if d < bd or (d == bd and p < best):
+                            bd = d
+                            best = p
+            if best >= 0:
+                out[r - r0, c] = s[best // w, best % w]

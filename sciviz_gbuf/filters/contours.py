@@ -333,23 +333,18 @@ def band_heights(
     if (band_interval is None) == (band_levels is None):
         raise InputError("band_heights: give exactly one of band_interval= or band_levels=")
     if band_interval is not None:
-        step = _validate.positive(band_interval, "band_interval")
-        b0 = _validate.finite(base, "base")
-
-        def index(h):
-            return np.floor((h - b0) / step).astype(np.int64)
+        spec = {
+            "step": _validate.positive(band_interval, "band_interval"),
+            "base": _validate.finite(base, "base"),
+        }
     else:
-        edges = _validate.levels(band_levels, "band_levels", limit="bands")
-
-        def index(h):
-            return np.searchsorted(edges, h, side="right").astype(np.int64)
-
+        spec = {"edges": _validate.levels(band_levels, "band_levels", limit="bands")}
     ring = _validate.size(min_ring, "min_ring", "line_width", closed=True, buffer=True)
     if _chunks.any_dask(field, mask):
         return _chunks.map_stencil(
             band_heights,
             {"field": field, "mask": mask},
-            halo=int(np.ceil(ring)) + 1,
+            halo=2 * (int(np.ceil(ring)) + 1),
             band_interval=band_interval,
             band_levels=band_levels,
             base=base,
@@ -357,7 +352,7 @@ def band_heights(
         )
     s, m, _ = _prepare(field, mask, None)
     valid = np.isfinite(s) if m is None else np.isfinite(s) & m
-    return _gen.band_heights(s, valid, index, ring)
+    return _gen.band_heights(s, valid, ring, **spec)
 
 
 def _halo(ring: float | None) -> int:

@@ -220,3 +220,85 @@ def test_band_heights_checks_its_options(kwargs, match):
 
     with pytest.raises(InputError, match=match):
         band_heights(np.zeros((8, 8), np.float32), **kwargs)
+
+
+# ------------------------------------- band islands: run-length kernel vs scipy's labelling
+def _rough(rng, shape, noise=3.0):
+    z = np.cumsum(np.cumsum(rng.standard_normal(shape), 0), 1)
+    return (z + noise * rng.standard_normal(shape)).astype(np.float32)
+
+
+def _islands_by_labelling(z, valid, index, ring):
+    """The band islands by definition: ``ndimage.label`` of each band, boxes by
+    ``find_objects``, no cell on the grid's edge or beside nodata."""
+    band = np.where(valid, index(np.where(valid, z, 0.0)), np.iinfo(np.int64).min)
+    cut = _contour_generalize.cut_cells(valid)
+    small = np.zeros(z.shape, bool)
+    for v in np.unique(band[valid]):
+        labels, _ = ndimage.label(band == v, EIGHT)
+        for k, box in enumerate(ndimage.find_objects(labels), 1):
+            here = labels == k
+            extent = max(box[0].stop - box[0].start, box[1].stop - box[1].start)
+            if extent <= ring and not cut[here].any():
+                small |= here
+    return small
+
+
+def _filled_from_a_nearest_cell(got, s, valid, small, reach):
+    """Every island cell took the height of a valid cell outside the islands at the least
+    distance from it among those within ``reach`` cells along each axis (the reference's
+    distance transform breaks ties otherwise), or kept its own with none there."""
+    yy, xx = np.mgrid[: s.shape[0], : s.shape[1]]
+    outside = valid & ~small
+    for i, j in zip(*np.nonzero(small), strict=True):
+        near = outside & (abs(yy - i) <= reach) & (abs(xx - j) <= reach)
+        if not near.any():
+            if got[i, j] != s[i, j]:
+                return False
+            continue
+        d2 = (yy - i) ** 2 + (xx - j) ** 2
+        ring = near & (d2 == d2[near].min())
+        if not np.isin(got[i, j], s[ring]):
+            return False
+    return True
+
+
+@pytest.mark.parametrize("seed", range(8))
+@pytest.mark.parametrize("ring", [3.0, 6.0, 9.0])
+def test_band_islands_kernel_equals_the_labelling(seed, ring):
+    """The run-length labelling finds the islands that a labelling per band with
+    ``scipy.ndimage`` finds (rough heights, scattered nodata, a lake, band edges), and each
+    island takes the height of one of its nearest cells outside; the reference changes the
+    same cells."""
+    rng = np.random.default_rng(seed)
+    shape = (int(rng.integers(5, 90)), int(rng.integers(5, 90)))
+    z = _rough(rng, shape)
+    valid = rng.random(shape) > 0.03
+    valid[shape[0] // 3 : shape[0] // 2, shape[1] // 4 : shape[1] // 2] = False
+    s = np.where(valid, z, np.nan).astype(np.float32)
+    edges = np.array([-20.0, 0.0, 3.0, 10.0])
+    for kwargs, spec, index in (
+        ({"step": 5.0, "base": 1.5}, (np.float32(1.5), np.float32(5.0), np.empty(0)),
+         lambda h: np.floor((h - 1.5) / 5.0).astype(np.int64)),
+        ({"edges": edges}, (np.float32(0.0), np.float32(1.0), edges),
+         lambda h: np.searchsorted(edges, h, side="right")),
+    ):  # fmt: skip
+        small = np.zeros(shape, bool)
+        _contour_generalize.small_islands(s, valid, spec, ring, small)
+        np.testing.assert_array_equal(small, _islands_by_labelling(s, valid, index, ring))
+        got = _contour_generalize.band_heights(z, valid, ring, **kwargs)
+        ref = _contour_generalize.band_heights_reference(z, valid, index, ring)
+        np.testing.assert_array_equal(np.isnan(got), ~valid)
+        # the same cells change (but for islands chained farther than the kernel's reach)
+        assert (valid & (got != s) != (valid & (ref != s))).sum() <= 0.02 * small.sum()
+        assert _filled_from_a_nearest_cell(got, s, valid, small, int(np.ceil(ring)) + 1)
+
+
+def test_band_islands_in_strips_are_the_islands_of_the_whole(monkeypatch):
+    rng = np.random.default_rng(11)
+    z = _rough(rng, (160, 70))
+    valid = rng.random(z.shape) > 0.02
+    whole = _contour_generalize.band_heights(z, valid, 6.0, step=4.0)
+    assert (valid & (whole != z)).sum() > 50  # islands were filled
+    monkeypatch.setattr(_contour_generalize, "STRIP_ROWS", 9)
+    np.testing.assert_array_equal(_contour_generalize.band_heights(z, valid, 6.0, step=4.0), whole)
