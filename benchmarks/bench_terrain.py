@@ -5,6 +5,8 @@ same run:
 
 - ours: ``sciviz-gbuf topo DEM -o map.png --contours 20,100`` - relief, colour bands and
   major/minor contour lines composited into one RGBA PNG (and once more with ``--geotiff``);
+  the default map generalises its contour lines (a cartographic step GDAL has not), so it is
+  also timed with ``--exact-contours``, the lines ``gdal_contour`` traces;
 - ours at ``--scale S`` (default 4): the map at S output pixels per DEM cell (heights resampled
   by clamped cubic convolution first), for DEMs whose map side stays within ``--max-side``;
   MPix/s counts output pixels;
@@ -165,6 +167,8 @@ def main() -> None:
             ]
             ours_cmds = [
                 ("sciviz-gbuf topo --contours 20,100 (PNG)", [], 1.0),
+                # the lines gdal_contour draws (no cartographic generalisation): like for like
+                ("sciviz-gbuf topo ... --exact-contours (PNG)", ["--exact-contours"], 1.0),
                 (
                     "sciviz-gbuf topo ... --geotiff (PNG + TIF)",
                     ["--geotiff", str(t / "m.tif")],

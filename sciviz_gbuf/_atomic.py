@@ -16,10 +16,15 @@ passed on to ``sys.stderr`` unchanged when it succeeds.
 
 The command line turns SIGTERM and SIGINT into :class:`Interrupted` with
 :func:`raising_signals`, so the same clean-up runs on a signal.
+
+The process's other plumbing lives here too: :func:`lazy_exports`, which lets a package's
+``__init__`` import its names on first use (so a command starts without the libraries it
+does not need).
 """
 
 from __future__ import annotations
 
+import importlib
 import os
 import re
 import secrets
@@ -27,6 +32,7 @@ import signal
 import sys
 import tempfile
 import threading
+import types
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
@@ -40,6 +46,7 @@ __all__ = [
     "Part",
     "atomic_folder",
     "atomic_output",
+    "lazy_exports",
     "native_stderr",
     "one_line",
     "output_group",
@@ -486,3 +493,49 @@ def atomic_folder(path: str | os.PathLike) -> Iterator[Path]:
         if isinstance(exc, OSError):
             raise OutputError(f"{final}: could not be written ({_describe(exc)})") from exc
         raise
+
+
+# ------------------------------------------------------------------ lazy package exports
+class _LazyPackage(types.ModuleType):
+    """A package whose names are imported on first use (:func:`lazy_exports`). A submodule
+    that has the name of a function it defines (``core.capture``) would replace that function
+    as the package's attribute when it is imported: the package keeps the function."""
+
+    _keep: frozenset[str] = frozenset()
+
+    def __setattr__(self, name: str, value: object) -> None:
+        if name in self._keep and isinstance(value, types.ModuleType):
+            return
+        super().__setattr__(name, value)
+
+
+def lazy_exports(package: str, exports: dict[str, str], submodules: tuple[str, ...] = ()) -> None:
+    """Make ``exports`` (public name -> module that defines it, relative to ``package``:
+    ``"camera"``, or ``"..core.framing"`` for a re-export from another package) and
+    ``submodules`` attributes of the package ``package`` that are imported on first use (PEP
+    562): importing a package then costs nothing, and a command that needs only the DEM
+    reader and the map does not wait for VTK and PyVista. Called at the end of a package's
+    ``__init__`` (internal to sciviz_gbuf; not part of the public API)."""
+    module = sys.modules[package]
+
+    def __getattr__(name: str) -> object:
+        target = exports.get(name)
+        if target is not None:
+            relative = target if target.startswith(".") else f".{target}"
+            value = getattr(importlib.import_module(relative, package), name)
+        elif name in submodules:
+            value = importlib.import_module(f".{name}", package)
+        else:
+            raise AttributeError(f"module {package!r} has no attribute {name!r}")
+        vars(module)[name] = value  # later look-ups find it directly
+        return value
+
+    def __dir__() -> list[str]:
+        return sorted({*vars(module), *exports, *submodules})
+
+    module.__getattr__ = __getattr__  # type: ignore[method-assign]
+    module.__dir__ = __dir__  # type: ignore[method-assign]
+    keep = frozenset(n for n, m in exports.items() if m.rsplit(".", 1)[-1] == n)
+    if keep:
+        module.__class__ = _LazyPackage
+        module._keep = keep

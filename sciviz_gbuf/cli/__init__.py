@@ -45,8 +45,10 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {one_line(message)}\n")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The argument parser (exposed for documentation and tests)."""
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The argument parser (exposed for documentation and tests); with ``command`` (the name
+    of a sub-command) only that one's module is imported and its sub-parser added, so
+    ``sciviz-gbuf topo --help`` does not wait for the modules of the other commands."""
     parser = _Parser(
         prog="sciviz-gbuf",
         description="Comprehensible rendering of 3-D shapes with G-buffers (PyVista/VTK).",
@@ -54,7 +56,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     for module, function in COMMANDS:
-        getattr(importlib.import_module(f".{module}", __name__), function)(sub)
+        if command is None or function == f"add_{command}":
+            getattr(importlib.import_module(f".{module}", __name__), function)(sub)
     return parser
 
 
@@ -77,8 +80,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit status: 0, or 2 for bad input, an output that
     could not be written, or SIGTERM/SIGINT (one line on stderr; no output file is left
     half-written, see ``_atomic``)."""
-    _announce(sys.argv[1:] if argv is None else list(argv))
-    args = build_parser().parse_args(argv)
+    given = sys.argv[1:] if argv is None else list(argv)
+    _announce(given)
+    known = {function.removeprefix("add_") for _, function in COMMANDS}
+    args = build_parser(given[0] if given and given[0] in known else None).parse_args(argv)
     # SIGTERM and SIGINT become an exception, so that the writers' clean-up runs: the output
     # being written is removed and the process exits 2 with one line, not by the signal. The
     # outputs of one command are renamed to their names together at its end: a command that

@@ -12,15 +12,12 @@ from .._progress import progress
 from ..apps.warmup import start as start_warmup
 from ..apps.warmup import stop as stop_warmup
 from ..compose import write_geotiff, write_png
-from ..datasets import load_jacksboro_dem
 from ..errors import InputError
 from ..readers import read_dem
-from ..recipes.birdseye import birdseye_gbuffer, birdseye_panels, sumi_e
 from ..recipes.labels import contour_labels, label_options, labels_to_geojson
 from ..recipes.layout import PAGES, write_map_page
 from ..recipes.terrain import RELIEFS, topographic_map
 from ..recipes.tiles import write_map_tiles
-from ..recipes.vector import topographic_picture, write_vector
 from ..writers.cog import (
     check_chunk_memory,
     check_worker_memory,
@@ -180,6 +177,9 @@ def _size_options(args: argparse.Namespace) -> dict:
 
 def _read_terrain(source, geographic: bool | None = None):
     if source is None:
+        # the bundled data's module loads PyVista (for its meshes): only when it is asked for
+        from ..datasets import load_jacksboro_dem
+
         return load_jacksboro_dem()
     return read_dem(source, geographic=geographic)
 
@@ -407,6 +407,9 @@ def _topo_in_memory(
 def _topo_vector(args: argparse.Namespace, source, out: Path, show: bool, t0: float) -> int:
     """``-o map.svg|map.pdf``: the map's colour and relief as an image, its contour lines as
     strokes with their levels and its labels as text."""
+    # the vector writers load the illustration styles: only for an SVG or PDF map
+    from ..recipes.vector import topographic_picture, write_vector
+
     with progress(show, 2, "topo") as bar:
         dem = _read_terrain(source, args.geographic)
         bar.step("map")
@@ -571,6 +574,9 @@ def _topo_tiles(args: argparse.Namespace, source, t0: float) -> int:
 
 
 def _cmd_birdseye(args: argparse.Namespace) -> int:
+    # VTK and PyVista load with the bird's-eye renderer: not for the plan-view commands
+    from ..recipes.birdseye import birdseye_gbuffer, birdseye_panels, sumi_e
+
     out = png_output(args.output)
     if args.labels and args.style not in ("mx4", "cn"):
         raise InputError(

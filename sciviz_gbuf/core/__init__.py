@@ -4,12 +4,28 @@ Everything above this layer (filters, styles, recipes, faces, apps, cli) works o
 makes: a :class:`GBuffer` of float32 channels and its :class:`CameraInfo`.
 """
 
-from .camera import VIEWS, CameraInfo
-from .capture import CaptureSession, capture
-from .frame import gbuffer_from_zbuffer, read_zbuffer
-from .framing import framed_camera, named_view_camera, oblique_camera, terrain_birdseye_camera
-from .gbuffer import GBuffer, check_gbuffer
-from .isosurface import isosurface
+from typing import TYPE_CHECKING
+
+from .._atomic import lazy_exports
+
+#: Public name -> module (relative to this package) that defines it: imported on first
+#: use (``_atomic.lazy_exports``), so importing one module of the package does
+#: not import them all.
+_EXPORTS = {
+    "VIEWS": "camera",
+    "CameraInfo": "camera",
+    "CaptureSession": "capture",
+    "capture": "capture",
+    "gbuffer_from_zbuffer": "frame",
+    "read_zbuffer": "frame",
+    "framed_camera": "framing",
+    "named_view_camera": "framing",
+    "oblique_camera": "framing",
+    "terrain_birdseye_camera": "framing",
+    "GBuffer": "gbuffer",
+    "check_gbuffer": "gbuffer",
+    "isosurface": "isosurface",
+}
 
 __all__ = [
     "VIEWS",
@@ -26,3 +42,13 @@ __all__ = [
     "read_zbuffer",
     "terrain_birdseye_camera",
 ]
+
+lazy_exports(__name__, _EXPORTS)
+
+if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerly
+    from .camera import VIEWS, CameraInfo
+    from .capture import CaptureSession, capture
+    from .frame import gbuffer_from_zbuffer, read_zbuffer
+    from .framing import framed_camera, named_view_camera, oblique_camera, terrain_birdseye_camera
+    from .gbuffer import GBuffer, check_gbuffer
+    from .isosurface import isosurface

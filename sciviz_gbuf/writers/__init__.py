@@ -1,10 +1,26 @@
 """Writers: PNG, GeoTIFF and Cloud-Optimized GeoTIFF files of composed images; GeoJSON of
 vector features; SVG and PDF line art; web-map tiles and their viewer."""
 
-from .cog import check_cog, local_client, write_cog
-from .geojson import write_geojson
-from .tiles import encode_tile, write_tile_viewer, write_tilejson
-from .vector import SvgText, write_pdf, write_strokes, write_svg
+from typing import TYPE_CHECKING
+
+from .._atomic import lazy_exports
+
+#: Public name -> module (relative to this package) that defines it: imported on first
+#: use (``_atomic.lazy_exports``), so importing one module of the package does
+#: not import them all.
+_EXPORTS = {
+    "check_cog": "cog",
+    "local_client": "cog",
+    "write_cog": "cog",
+    "write_geojson": "geojson",
+    "encode_tile": "tiles",
+    "write_tile_viewer": "tiles",
+    "write_tilejson": "tiles",
+    "SvgText": "vector",
+    "write_pdf": "vector",
+    "write_strokes": "vector",
+    "write_svg": "vector",
+}
 
 __all__ = [
     "SvgText",
@@ -19,3 +35,11 @@ __all__ = [
     "write_tile_viewer",
     "write_tilejson",
 ]
+
+lazy_exports(__name__, _EXPORTS)
+
+if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerly
+    from .cog import check_cog, local_client, write_cog
+    from .geojson import write_geojson
+    from .tiles import encode_tile, write_tile_viewer, write_tilejson
+    from .vector import SvgText, write_pdf, write_strokes, write_svg
