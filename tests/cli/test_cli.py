@@ -260,3 +260,42 @@ def test_the_package_exports_resolve_lazily():
     assert sg.filters.contour_lines is not None and "capture" in dir(sg)
     with pytest.raises(AttributeError):
         _ = sg.no_such_name
+
+
+_LOADED = """
+import sys
+from sciviz_gbuf.cli import main
+try:
+    main(sys.argv[1:])
+except SystemExit:  # --help
+    pass
+heavy = sorted(m for m in ("pyvista", "vtkmodules", "distributed", "trame") if m in sys.modules)
+print("LOADED", ",".join(heavy))
+"""
+
+
+def _heavy_modules_of(args: list[str]) -> list[str]:
+    r = subprocess.run([sys.executable, "-c", _LOADED, *args], capture_output=True, text=True,
+                       check=False, timeout=600)  # fmt: skip
+    line = next((t for t in r.stdout.splitlines() if t.startswith("LOADED")), None)
+    assert line is not None, r.stderr
+    return [m for m in line.removeprefix("LOADED").strip().split(",") if m]
+
+
+def test_plan_view_maps_do_not_load_vtk(tmp_path):
+    """``topo --help`` and a topographic map of a GeoTIFF import neither PyVista nor VTK (nor
+    dask.distributed): the packages import their names on first use, the command line only
+    the named command's module."""
+    rasterio = pytest.importorskip("rasterio")
+    from rasterio.transform import from_origin
+
+    dem = tmp_path / "dem.tif"
+    z = np.add.outer(np.arange(64.0), np.arange(48.0)).astype(np.float32) * 5.0
+    profile = {"driver": "GTiff", "width": 48, "height": 64, "count": 1, "dtype": "float32",
+               "crs": "EPSG:32613", "transform": from_origin(4e5, 4.5e6, 10.0, 10.0)}  # fmt: skip
+    with rasterio.open(dem, "w", **profile) as f:
+        f.write(z, 1)
+    assert _heavy_modules_of(["topo", "--help"]) == []
+    out = tmp_path / "map.png"
+    assert _heavy_modules_of(["topo", str(dem), "-o", str(out), "--no-progress"]) == []
+    assert out.exists()
