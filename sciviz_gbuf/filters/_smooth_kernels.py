@@ -20,7 +20,7 @@ from numba import njit
 
 from ..core.bands import run_bands
 
-__all__ = ["blend_kernel", "local_linear_kernel"]
+__all__ = ["blend_kernel", "least_gradient", "local_linear_kernel"]
 
 
 def local_linear_kernel(
@@ -138,6 +138,22 @@ def _x_rows(
 
 
 @njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _ztaps4(
+    mz: np.ndarray, myz: np.ndarray, mxz: np.ndarray, a0: np.ndarray, a1: np.ndarray,
+    a2: np.ndarray, a3: np.ndarray, b0: np.ndarray, b1: np.ndarray, b2: np.ndarray,
+    b3: np.ndarray, g0: float, g1: float, g2: float, g3: float, d0: float, d1: float,
+    d2: float, d3: float,
+) -> None:  # fmt: skip
+    """Four y-taps of the height moments at once: ``mz += g a``, ``myz += g d a``,
+    ``mxz += g b`` for rows ``a0..a3`` (x-pass ``g``) and ``b0..b3`` (x-pass ``g d``), added
+    one tap after the other as four calls of one tap would."""
+    for j in range(mz.shape[0]):
+        mz[j] = (((mz[j] + g0 * a0[j]) + g1 * a1[j]) + g2 * a2[j]) + g3 * a3[j]
+        myz[j] = (((myz[j] + d0 * a0[j]) + d1 * a1[j]) + d2 * a2[j]) + d3 * a3[j]
+        mxz[j] = (((mxz[j] + g0 * b0[j]) + g1 * b1[j]) + g2 * b2[j]) + g3 * b3[j]
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
 def _v_taps(acc: np.ndarray, xs: np.ndarray, i: int, g: np.ndarray, gd: np.ndarray,
             gdd: np.ndarray) -> None:  # fmt: skip
     """The y-passes of the six mask moments of row ``i`` into ``acc[0..5]`` (zeroed by the
@@ -186,12 +202,23 @@ def _y_rows(
         for f in range(9):
             for j in range(w):
                 acc[f, j] = 0.0
-        for t in range(2 * r + 1):
+        # mz, myz, mxz: four taps a pass where four rows are in the grid (each sum still
+        # taken tap by tap in order, so the same bits; a quarter of the loads and stores)
+        t = 0
+        while t < 2 * r + 1:
             row = i + t - r
             if row < 0 or row >= h:
-                continue
-            _taps2(acc[6], acc[7], xs[3, row], g[t], gd[t])  # mz, myz
-            _taps1(acc[8], xs[4, row], g[t])  # mxz
+                t += 1
+            elif t + 3 < 2 * r + 1 and row + 3 < h:
+                _ztaps4(acc[6], acc[7], acc[8], xs[3, row], xs[3, row + 1], xs[3, row + 2],
+                        xs[3, row + 3], xs[4, row], xs[4, row + 1], xs[4, row + 2],
+                        xs[4, row + 3], g[t], g[t + 1], g[t + 2], g[t + 3], gd[t], gd[t + 1],
+                        gd[t + 2], gd[t + 3])  # fmt: skip
+                t += 4
+            else:
+                _taps2(acc[6], acc[7], xs[3, row], g[t], gd[t])
+                _taps1(acc[8], xs[4, row], g[t])
+                t += 1
         # the mask moments: constants where the window is full, summed over runs elsewhere
         j = 0
         while j < w:
@@ -324,3 +351,16 @@ def blend_kernel(
               float(per_px), float(steep), float(sigma_max), float(sigma_grad),
               float(displace), float(displace / np.sqrt(2.0)), out, grad)  # fmt: skip
     return out, grad
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def least_gradient(b: np.ndarray, c: np.ndarray, valid: np.ndarray) -> float:
+    """The least ``hypot(b, c)`` over the ``valid`` cells (inf if none): one pass, no
+    temporaries (the smoothing asks it of every strip's slope fit)."""
+    h, w = b.shape
+    best = np.inf
+    for i in range(h):
+        for j in range(w):
+            if valid[i, j]:
+                best = min(best, np.hypot(b[i, j], c[i, j]))
+    return best
