@@ -315,15 +315,17 @@ def drop_small_rings(
 def ring_opening(ink: np.ndarray, cut: np.ndarray, min_ring: float, min_stub: float) -> np.ndarray:
     """:func:`drop_small_rings` of one piece, ``cut`` the cells where a line counts as cut
     short (the kernel :func:`~._contour_kernels.ring_opening`)."""
-    flat = ink.ravel()
-    inked = np.flatnonzero(flat > LOW_INK)
-    if inked.size == 0:
+    # by decreasing ink; ties in raster order (any order of ties gives the same opening); ink
+    # above LOW_INK = 0 is inked (the kernel's rule). The arrays are as long as the image:
+    # only the m entries used are touched.
+    ink = np.ascontiguousarray(ink, np.float32)
+    node = np.empty(ink.shape, np.int32)
+    order = np.empty(ink.size, np.int32)
+    m = _k.ink_order(ink.ravel().view(np.uint32), node.ravel(), order, np.empty(ink.size, np.int32),
+                     np.empty((2, 65537), np.int64))  # fmt: skip
+    if m == 0:
         return np.zeros_like(ink)
-    # by decreasing ink; ties in raster order (any order of ties gives the same opening)
-    order = inked[np.argsort(-flat[inked], kind="stable")].astype(np.int32)
-    node = np.full(ink.shape, -1, np.int32)
-    node.ravel()[order] = np.arange(order.size, dtype=np.int32)
-    m = order.size
+    order = order[:m]
     out = np.empty(ink.shape, np.float32)
     _k.ring_opening(ink, node, order, np.ascontiguousarray(cut), np.float32(min_ring),
                     np.float32(min_stub), np.empty(m, np.int32), np.empty(m, np.int32),

@@ -88,7 +88,9 @@ def write_png(path: str | os.PathLike, image: np.ndarray, *, dpi: float | None =
         raise InputError(f"path: no such directory {str(p.parent)!r}")
     if dpi is not None:
         dpi = _validate.size(dpi, "dpi", "dpi")
-    pixels = to_uint8(image)
+    pixels = check_image(image)
+    if pixels.dtype != np.uint8:
+        pixels = to_uint8(pixels)  # (uint8 is written as it is: the file only reads it)
     with atomic_output(path) as part:
         if pixels.shape[0] * pixels.shape[1] >= LARGE_IMAGE:
             write_png_fast(part.path, pixels, dpi=dpi)  # checks the size on disk itself

@@ -302,3 +302,23 @@ def test_band_islands_in_strips_are_the_islands_of_the_whole(monkeypatch):
     assert (valid & (whole != z)).sum() > 50  # islands were filled
     monkeypatch.setattr(_contour_generalize, "STRIP_ROWS", 9)
     np.testing.assert_array_equal(_contour_generalize.band_heights(z, valid, 6.0, step=4.0), whole)
+
+
+def test_ink_order_is_a_stable_sort_by_decreasing_ink():
+    """The radix sort of the ring opening: the order of ``argsort(-ink, kind="stable")`` over
+    the pixels with ink > 0 (ties, zeros, negative zero, NaN and infinity among them)."""
+    from sciviz_gbuf.filters import _contour_kernels
+
+    rng = np.random.default_rng(2)
+    ink = rng.choice(np.float32([0.0, -0.0, 0.25, 0.5, 1.0, np.nan, np.inf, 1e-30]), 5000)
+    ink[::7] = rng.random(ink[::7].size).astype(np.float32)
+    node = np.empty(ink.size, np.int32)
+    order = np.empty(ink.size, np.int32)
+    m = _contour_kernels.ink_order(ink.view(np.uint32), node, order, np.empty(ink.size, np.int32),
+                                   np.empty((2, 65537), np.int64))  # fmt: skip
+    inked = np.flatnonzero(ink > 0)
+    expect = inked[np.argsort(-ink[inked], kind="stable")]
+    assert m == inked.size
+    np.testing.assert_array_equal(order[:m], expect)
+    np.testing.assert_array_equal(node[expect], np.arange(m))
+    assert (node[ink <= 0] == -1).all() and (node[np.isnan(ink)] == -1).all()
