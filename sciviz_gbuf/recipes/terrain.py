@@ -148,7 +148,7 @@ def topographic_map(
         Darken cells in the cast shadow of other terrain (rayshader's ``ray_shade``).
     sky_view : bool, default: False
         Darken cells that see less of the sky (valleys, pits; rayshader's ``ambient_shade``).
-        Slow: about 1 MPix/s (16 directions, 50 cells out), minutes for a large DEM.
+        Slower than the other layers: about 15 MPix/s (16 directions, 50 cells out).
     labels : bool, default: False
         Write the heights of the index (major) contours into the lines
         (:func:`~sciviz_gbuf.recipes.labels.contour_labels` gives the placements): the text
