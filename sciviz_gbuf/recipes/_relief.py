@@ -36,6 +36,7 @@ from ..errors import InputError
 from ..filters import fill_nodata_ring, hillshade, local_relief, openness, texture_shade
 from ..filters import sky_view as sky_view_factor
 from ..filters.terrain_light import sky_view_reach
+from .map_options import RELIEFS
 
 __all__ = [
     "RELIEFS",
@@ -47,15 +48,6 @@ __all__ = [
     "relief_style",
 ]
 
-#: Relief style -> what it shows (the vocabulary of ``topographic_map(relief=)`` and
-#: ``topo --relief``).
-RELIEFS = {
-    "hillshade": "GDAL's hillshade",
-    "vat": "RVT's VAT blend of hillshade, slope, positive openness and sky view",
-    "openness": "hillshade with positive openness overlaid (ridges light, valleys dark)",
-    "texture": "hillshade with Brown's texture shading overlaid (drainage at every scale)",
-    "local_relief": "hillshade with the local relief model overlaid (small landforms)",
-}
 #: Ray length of VAT's openness and sky view, in cells (RVT's default radius).
 VAT_CELLS = 10
 _DIRECTIONS = 16

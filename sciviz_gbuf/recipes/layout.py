@@ -30,6 +30,7 @@ from ._map import CONTOUR_COLOR, as_dem
 from ._resample import map_grid
 from .furniture import legend_classes, scale_bar
 from .labels import PAD_FONTS, ContourLabel, label_boxes, label_options, labels_of_grid
+from .map_options import PAGES
 from .terrain import topographic_map
 
 __all__ = [
@@ -41,8 +42,6 @@ __all__ = [
     "write_map_page",
 ]
 
-#: Page sizes, (width, height) in millimetres, portrait.
-PAGES = {"A4": (210.0, 297.0), "A3": (297.0, 420.0), "letter": (215.9, 279.4)}
 #: Page margin, mm.
 MARGIN_MM = 12.0
 #: Height of the furniture strip below the map frame, mm.
