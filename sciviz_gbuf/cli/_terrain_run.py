@@ -246,15 +246,19 @@ def _topo_in_memory(
             write_geotiff(args.geotiff, rgba, dem=dem)
             bar.step("geotiff")
         if args.labels_geojson is not None:
-            opts = _topo_options(args, False)
-            keys = ("interval", "major_interval", "size", "scale", "dpi", "label_size",
-                    "label_spacing")  # fmt: skip
-            placed = contour_labels(dem, **{k: opts[k] for k in keys if k in opts})
-            write_geojson(args.labels_geojson, labels_to_geojson(placed, crs=dem.crs))
+            _write_labels_geojson(args, dem)
     h, w = rgba.shape[:2]
     extra = "".join(f" and {f}" for f in (args.geotiff, args.overview, args.labels_geojson) if f)
     print(f"wrote {out}{extra} ({w}x{h}) in {time.perf_counter() - t0:.1f} s")
     return 0
+
+
+def _write_labels_geojson(args: argparse.Namespace, dem) -> None:
+    """``--labels-geojson``: the map's label placements as GeoJSON points."""
+    opts = _topo_options(args, False)
+    keys = ("interval", "major_interval", "size", "scale", "dpi", "label_size", "label_spacing")
+    placed = contour_labels(dem, **{k: opts[k] for k in keys if k in opts})
+    write_geojson(args.labels_geojson, labels_to_geojson(placed, crs=dem.crs))
 
 
 def _topo_vector(args: argparse.Namespace, source, out: Path, show: bool, t0: float) -> int:
@@ -270,11 +274,7 @@ def _topo_vector(args: argparse.Namespace, source, out: Path, show: bool, t0: fl
         bar.step("write")
         write_vector(out, picture, title=Path(args.dem[0]).name if args.dem else "Jacksboro")
         if args.labels_geojson is not None:
-            opts = _topo_options(args, False)
-            keys = ("interval", "major_interval", "size", "scale", "dpi", "label_size",
-                    "label_spacing")  # fmt: skip
-            placed = contour_labels(dem, **{k: opts[k] for k in keys if k in opts})
-            write_geojson(args.labels_geojson, labels_to_geojson(placed, crs=dem.crs))
+            _write_labels_geojson(args, dem)
     w, h = picture.size
     extra = f" and {args.labels_geojson}" if args.labels_geojson else ""
     print(
