@@ -1,11 +1,13 @@
 """Cloud-Optimised GeoTIFF output of images larger than memory (dask), block by block.
 
-:func:`write_cog` computes a (dask) image one chunk at a time, writes each chunk as a window
-of a tiled temporary GeoTIFF beside the output, then lets GDAL's COG driver copy that file
-into a Cloud-Optimised GeoTIFF with internal overviews (it streams: neither step holds the
-whole image). The chunks are computed on any dask scheduler: the local threads (default), a
-local process pool, or a ``dask.distributed`` cluster, whose results are streamed back and
-written one by one as they finish, so the writing process's memory stays bounded too.
+:func:`write_cog` computes a (dask) image one chunk at a time; where each chunk is computed
+(a thread of this process, or a ``dask.distributed`` worker) its tiles, and its tiles of the
+overview levels that lie inside it, are deflated, and only those bytes come back. This
+process stores them in a scratch file as they arrive, builds the coarse overview levels from
+the chunks' halved pieces and writes the COG in its layout
+(:mod:`sciviz_gbuf.writers._cog_layout`). Nothing holds the whole image, and nothing is
+encoded twice: workers add up. The chunks are computed on any dask scheduler: the local
+threads (default), a local process pool, or a cluster.
 """
 
 from __future__ import annotations
@@ -13,17 +15,27 @@ from __future__ import annotations
 import os
 import threading
 from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from concurrent.futures import ThreadPoolExecutor
+from contextlib import ExitStack, contextmanager
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from .. import _dask
-from .._atomic import Part, atomic_output, scratch_file
+from .._atomic import atomic_output, scratch_file
 from .._progress import progress
 from ..errors import InputError, SciVizGBufError
-from .geotiff import check_tiff, gdal_writing, georeference, rasterio_crs, uint8_profile
+from ._cog_layout import (
+    TILE,
+    TileStore,
+    deflate_level,
+    encode_block,
+    geo_entries,
+    level_shapes,
+    worker_levels,
+)
+from .geotiff import check_tiff, georeference, rasterio_crs
 from .png import to_uint8, write_png
 
 __all__ = [
@@ -36,9 +48,12 @@ __all__ = [
 ]
 
 #: COG tile edge (GDAL's default for the COG driver).
-BLOCK = 512
-#: GDAL block cache (MB) while writing: a few rows of 512-pixel tiles of a wide map.
-_CACHE_MB = 256
+BLOCK = TILE
+#: Blocks of an in-memory image, encoded on this process's threads: whole tiles of levels
+#: 0-2 each, the coarser levels from their pieces.
+NUMPY_BLOCK = 4 * TILE
+#: Write buffer of the COG file.
+_WRITE_BUFFER = 8 * 2**20
 
 
 def local_client(
@@ -119,21 +134,29 @@ def write_cog(
     The image is computed and written chunk by chunk: at no point is all of it in memory, so
     a lazy :func:`~sciviz_gbuf.recipes.terrain.topographic_map` of a DEM read with
     ``read_dem(..., chunks=...)`` can be any size the disk holds. Output: 512 x 512 tiles,
-    deflate (horizontal predictor), internal overviews (average resampling, GDAL's COG
-    ``OVERVIEWS=AUTO``: halving until a level fits one tile), BigTIFF when needed, the fourth
-    band tagged as alpha like :func:`~sciviz_gbuf.compose.write_geotiff`. GDAL marks the file
-    ``LAYOUT=COG`` (checked after writing).
+    deflate (horizontal predictor), internal overviews (halving until a level fits one
+    tile, GDAL's COG ``OVERVIEWS=AUTO``; each pixel the mean of the 2 x 2 below it, the colour
+    weighted by alpha), BigTIFF when needed, the fourth band tagged as alpha like
+    :func:`~sciviz_gbuf.compose.write_geotiff`. GDAL reads the file as ``LAYOUT=COG``
+    (checked after writing).
+
+    Each chunk's tiles, and its tiles of the overview levels that lie inside it, are
+    deflated where the chunk is computed (a dask worker, or a thread): nothing is encoded
+    twice, and workers add up (:mod:`sciviz_gbuf.writers._cog_layout`). This process only
+    stores the encoded tiles, builds the few coarse levels from the chunks' halved pieces,
+    and writes the file in the COG order.
 
     Parameters
     ----------
     image : (H, W), (H, W, 3) or (H, W, 4) numpy or dask array
         uint8 (as is), bool (0/255) or float in ``[0, 1]`` (``round(255 x)``), like
         :func:`~sciviz_gbuf.compose.write_geotiff`. A dask array is computed one chunk at a
-        time (chunks are grown to multiples of 512 pixels so each write fills whole tiles).
+        time (chunks are grown to multiples of 512 pixels so each holds whole tiles; chunks
+        of 2048 or 4096 pixels let the workers encode the overview levels too).
     path : str or path-like
-        Output ``.tif``/``.tiff``; its directory must exist. A temporary file beside it (removed
-        afterwards) holds the pixels before the COG copy, so that folder needs about the
-        output's size free twice.
+        Output ``.tif``/``.tiff``; its directory must exist. Temporary files beside it
+        (removed afterwards) hold the encoded tiles and a coarse level before the COG is
+        written, so that folder needs about the output's size free twice.
     dem : sciviz_gbuf.readers.DEM, optional
         Take ``transform`` and ``crs`` from this DEM; an image of another size covers the
         DEM's extent (the pixel size follows the image, as in
@@ -152,8 +175,8 @@ def write_cog(
         or the default ``distributed`` client if one is active); a ``Client``; the address of
         a running scheduler (``"tcp://host:8786"``); or ``"local"`` for a new
         :func:`local_client` (2 worker processes), closed afterwards. With ``distributed``,
-        the blocks are one graph (each input chunk read once), gathered as they finish and
-        each written and dropped at once.
+        the blocks are one graph (each input chunk read once), gathered as they finish
+        (encoded tiles, a fraction of the pixels' bytes) and each stored and dropped at once.
     progress_bar : bool, optional
         Show a tqdm bar of blocks written (PyVista's convention).
 
@@ -170,15 +193,11 @@ def write_cog(
         transform or CRS, an image of another shape or dtype, a bad
         ``overview_size`` or ``client``.
     OutputError
-        The COG or its preview could not be written completely (disk full, file too large, a
-        GDAL error, interrupted): neither is left under its name. Both are written to
-        temporary files beside them, checked (the TIFF is whole, its layout a COG) and renamed
-        only when both are done (the preview first).
+        The COG or its preview could not be written completely (disk full, file too large,
+        interrupted): neither is left under its name. Both are written to temporary files
+        beside them, checked (GDAL reads the TIFF whole, its layout a COG) and renamed only
+        when both are done (the preview first).
     """
-    import rasterio
-    import rasterio.shutil
-    from rasterio.enums import ColorInterp
-
     out = _tif_path(path)
     png = None if overview_png is None else _png_path(overview_png)
     if isinstance(overview_size, bool) or not isinstance(overview_size, (int, np.integer)):
@@ -187,101 +206,99 @@ def write_cog(
         raise InputError(f"overview_size: expected a positive int, got {overview_size!r}")
     pixels = _as_uint8(image)
     h, w, c = pixels.shape
-    profile = _profile(h, w, c, dem, transform, crs)
+    gt = georeference(dem, transform, crs, "write_cog", (h, w))
+    geo = geo_entries(tuple(gt), rasterio_crs(dem.crs if dem is not None else crs))
     is_lazy = _dask.is_dask(pixels)
     if is_lazy:
         pixels = _aligned(pixels)
-        n_blocks = len(pixels.chunks[0]) * len(pixels.chunks[1])
+        chunks = pixels.chunks[:2]
     else:
-        n_blocks = -(-h // (4 * BLOCK))
-    interp = {
-        1: [ColorInterp.gray],
-        3: [ColorInterp.red, ColorInterp.green, ColorInterp.blue],
-        4: [ColorInterp.red, ColorInterp.green, ColorInterp.blue, ColorInterp.alpha],
-    }[c]
-    large = h * w >= 4_000_000
+        chunks = tuple(_steps(n, NUMPY_BLOCK) for n in (h, w))
+    n_blocks = len(chunks[0]) * len(chunks[1])
+    n_levels = len(level_shapes(h, w))
+    top = worker_levels(chunks, n_levels)
+    zlevel = deflate_level(h * w >= 4_000_000)
+    steps = n_blocks + (n_levels - 1 - top) + 1 + (png is not None)
     with (
-        # GDAL's block cache defaults to 5 % of RAM, filled with dirty tiles before it flushes:
-        # a fixed cap keeps this process's memory independent of the image size.
-        rasterio.Env(GDAL_CACHEMAX=_CACHE_MB),
-        progress(progress_bar, n_blocks + 1 + (png is not None), "write_cog") as bar,
+        progress(progress_bar, steps, "write_cog") as bar,
         # The COG and its preview are complete or absent: the COG stays in its temporary file
         # until the preview (read from it) is written too.
         atomic_output(path) as part,
+        ExitStack() as scratch,
     ):
-        with scratch_file(out, "tiles") as tmp:
-            writer = _WindowWriter(tmp, profile, interp, part, bar, n_blocks)
-            try:
-                if is_lazy:
-                    _compute_into(pixels, writer, client)
-                else:
-                    for r0 in range(0, h, 4 * BLOCK):
-                        writer[r0 : r0 + 4 * BLOCK, 0:w] = pixels[r0 : r0 + 4 * BLOCK]
-            except BaseException:
-                writer.close(quiet=True)
-                raise
-            writer.close()
-            check_tiff(part, (h, w, c), tmp)  # the intermediate: its close may have failed
-            with gdal_writing(part):
-                _waiting(
-                    rasterio.shutil.copy,
-                    tmp,
-                    part.path,
-                    driver="COG",
-                    BLOCKSIZE=BLOCK,
-                    COMPRESS="DEFLATE",
-                    # Level 1 on large maps: ~3x faster than 6 for a few % more bytes.
-                    LEVEL=1 if large else 6,
-                    PREDICTOR="YES",
-                    RESAMPLING="AVERAGE",
-                    OVERVIEWS="IGNORE_EXISTING",
-                    BIGTIFF="IF_SAFER",
-                    NUM_THREADS="ALL_CPUS",
-                )
+        store = TileStore((h, w, c), lambda tag: scratch.enter_context(scratch_file(out, tag)))
+        scratch.callback(store.close)
+        sink = _Sink(store, top, n_levels, bar, n_blocks)
+        job = (top, n_levels, zlevel)
+        if is_lazy:
+            _compute_into(pixels, sink, client, job)
+        else:
+            _encode_numpy(pixels, chunks, sink, job)
+        if top < n_levels - 1:
+            store.encode_levels(top + 1, zlevel, bar.step)
+        gap = store.missing()
+        if gap is not None:
+            part.fail(f"tile {gap[1:]} of level {gap[0]} was not computed")
+        with open(part.path, "wb", buffering=_WRITE_BUFFER) as f:
+            part.expected_size = store.write(f, geo)
+        scratch.close()  # the scratch files go before the checks
+        bar.step("COG")
         check_tiff(part, (h, w, c))
         problem = _layout_problem(part.path)
         if problem is not None:
             part.fail(f"not a valid Cloud-Optimised GeoTIFF: {problem}")
-        bar.step("COG")
         if png is not None:
             _overview_png(part.path, png, int(overview_size))
             bar.step("overview")
     return out
 
 
-def _waiting(func: Any, *args: Any, **kwargs: Any) -> Any:
-    """``func(*args, **kwargs)`` in a helper thread, this one waiting in short steps.
+def _steps(n: int, step: int) -> tuple[int, ...]:
+    """Chunk sizes of ``n`` pixels in steps of ``step``."""
+    return tuple(min(step, n - s) for s in range(0, n, step))
 
-    A long GDAL call (the COG copy of a large map takes minutes) holds the main thread until it
-    returns, and Python runs signal handlers only there, between bytecodes: SIGTERM would wait
-    for the call. GDAL releases the GIL, so while it works in the helper this thread keeps
-    running bytecodes, and the :func:`~sciviz_gbuf._atomic.raising_signals` handler raises at
-    once; the clean-up that follows removes the files the abandoned call was writing.
-    """
-    import rasterio
 
-    box: dict[str, Any] = {}
-    options = rasterio.env.getenv() if rasterio.env.hasenv() else {}
+class _Sink:
+    """Stores the encoded tiles of a block and places its piece of the first level this
+    process encodes; one call per block, from any thread."""
 
-    def run() -> None:
-        try:
-            with rasterio.Env(**options):  # rasterio's settings are per thread
-                box["result"] = func(*args, **kwargs)
-        except BaseException as exc:  # re-raised in the caller's thread
-            box["error"] = exc
+    def __init__(self, store: TileStore, top: int, n_levels: int, bar: Any, total: int) -> None:
+        self.store, self.top, self.n_levels, self.bar, self.total = store, top, n_levels, bar, total
+        self.done = 0
+        self.lock = threading.Lock()
 
-    helper = threading.Thread(target=run, name="sciviz-gbuf-gdal", daemon=True)
-    helper.start()
-    while helper.is_alive():
-        helper.join(0.1)
-    if "error" in box:
-        raise box["error"]
-    return box.get("result")
+    def __call__(self, r0: int, c0: int, tiles: list, piece: np.ndarray | None) -> None:
+        self.store.add(tiles)
+        if piece is not None:
+            k = self.top + 1
+            self.store.put(k, r0 >> k, c0 >> k, piece)
+        with self.lock:
+            self.done += 1
+            self.bar.step(f"block {self.done}/{self.total}")
+
+
+def _encode_numpy(pixels: np.ndarray, chunks: tuple, sink: _Sink, job: tuple) -> None:
+    """An in-memory image: its blocks encoded on this process's threads (deflate and numpy
+    release the GIL)."""
+    starts = [np.cumsum((0, *c))[:-1] for c in chunks]
+    blocks = [(int(r0), int(c0)) for r0 in starts[0] for c0 in starts[1]]
+    rows, cols = chunks
+
+    def run(rc: tuple[int, int]) -> None:
+        r0, c0 = rc
+        i = int(np.searchsorted(starts[0], r0))
+        j = int(np.searchsorted(starts[1], c0))
+        block = pixels[r0 : r0 + rows[i], c0 : c0 + cols[j]]
+        sink(r0, c0, *encode_block(block, r0, c0, *job))
+
+    with ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as pool:
+        for _ in pool.map(run, blocks):
+            pass
 
 
 def check_cog(path: str | os.PathLike) -> None:
-    """Raise :class:`~sciviz_gbuf.errors.SciVizGBufError` unless ``path`` is a tiled COG (GDAL's
-    ``LAYOUT=COG``) with overviews (when larger than one tile)."""
+    """Raise :class:`~sciviz_gbuf.errors.SciVizGBufError` unless ``path`` is a COG (GDAL's
+    ``LAYOUT=COG``), tiled and with overviews when larger than one tile."""
     problem = _layout_problem(path)
     if problem is not None:
         raise SciVizGBufError(f"{path}: not a valid Cloud-Optimised GeoTIFF ({problem})")
@@ -296,7 +313,8 @@ def _layout_problem(path: str | os.PathLike) -> str | None:
         tiled = src.profile.get("tiled", False)
         overviews = src.overviews(1)
         big = max(src.shape) > BLOCK
-    if layout != "COG" or not tiled or (big and not overviews):
+    # one tile: rasterio calls a file whose tile is the whole image untiled
+    if layout != "COG" or (big and (not tiled or not overviews)):
         return f"LAYOUT={layout}, tiled={tiled}, overviews={overviews}"
     return None
 
@@ -351,93 +369,53 @@ def _aligned(image):
     return image.rechunk(target)
 
 
-def _profile(h: int, w: int, c: int, dem: Any, transform: Any, crs: Any) -> dict:
-    """rasterio profile of the temporary tiled GeoTIFF, georeference checked."""
-    from rasterio.transform import Affine
+def _block_tasks(image, job: tuple) -> list[tuple[int, int, Any]]:
+    """``(r0, c0, task)`` of every block, row-major: the task encodes the block
+    (:func:`~sciviz_gbuf.writers._cog_layout.encode_block`) where it is computed. All tasks
+    share one graph: a map block needs its neighbours' input chunks (the halo), and only
+    within one graph is each input chunk read (or generated) once."""
+    import dask
 
-    gt = georeference(dem, transform, crs, "write_cog", (h, w))
-    # Temporary: fastest deflate; the COG copy recompresses anyway.
-    return uint8_profile(
-        h,
-        w,
-        c,
-        Affine.from_gdal(*gt),
-        rasterio_crs(dem.crs if dem is not None else crs),
-        block=BLOCK,
-        zlevel=1,
-        bigtiff=True,
-    )
-
-
-class _WindowWriter:
-    """``writer[rows, cols] = block`` writes an (h, w, c) block as a window of the tiled
-    GeoTIFF ``path``, one at a time; :meth:`close` closes it.
-
-    Each GDAL call runs under :func:`~sciviz_gbuf.writers.geotiff.gdal_writing` (GDAL's
-    messages and errors become the OutputError of ``part``), but not the progress bar's
-    update, which must reach the terminal as it happens.
-    """
-
-    def __init__(
-        self, path: Path, profile: dict, interp: list, part: Part, bar: Any, total: int
-    ) -> None:
-        import rasterio
-
-        self.part, self.bar, self.total, self.done = part, bar, total, 0
-        self.lock = threading.Lock()
-        self.closed = False
-        with gdal_writing(part):
-            self.dst = rasterio.open(path, "w", **profile)
-            self.dst.colorinterp = interp  # before the pixels: GDAL sets ExtraSamples then
-
-    def __setitem__(self, key: tuple[slice, ...], block: np.ndarray) -> None:
-        from rasterio.windows import Window
-
-        r0, c0 = key[0].start or 0, key[1].start or 0
-        block = np.asarray(block)
-        h, w = block.shape[:2]
-        with self.lock:  # GDAL datasets are not thread-safe; da.store calls from its threads
-            if self.closed:  # the write was abandoned (an error, a signal): drop the block
-                raise SciVizGBufError(f"{self.part.shown}: write abandoned")
-            with gdal_writing(self.part):
-                self.dst.write(np.moveaxis(block, 2, 0), window=Window(c0, r0, w, h))
-            self.done += 1
-            self.bar.step(f"block {self.done}/{self.total}")
-
-    def close(self, *, quiet: bool = False) -> None:
-        """Close the file once no thread writes to it; ``quiet``: while another exception is
-        on its way up (the file is discarded), ignore GDAL's errors of the close."""
-        with self.lock:
-            if self.closed:
-                return
-            self.closed = True
-            try:
-                with gdal_writing(self.part):
-                    self.dst.close()
-            except SciVizGBufError:
-                if not quiet:
-                    raise
+    r_edges, c_edges = (np.cumsum((0, *c))[:-1] for c in image.chunks[:2])
+    blocks = image.to_delayed()
+    encode = dask.delayed(encode_block, pure=True)
+    return [
+        (int(r0), int(c0), encode(blocks[i, j, 0], int(r0), int(c0), *job))
+        for i, r0 in enumerate(r_edges)
+        for j, c0 in enumerate(c_edges)
+    ]
 
 
-def _compute_into(image, writer: _WindowWriter, client: Any) -> None:
-    """Compute every block of ``image`` and write it, on the scheduler ``client`` says."""
+def _compute_into(image, sink: _Sink, client: Any, job: tuple) -> None:
+    """Compute and encode every block of ``image`` on the scheduler ``client`` says, each
+    result stored by ``sink`` as it comes."""
     from dask.base import get_scheduler
 
     if client is None:
         scheduler = get_scheduler(collections=[image])
         owner = getattr(scheduler, "__self__", None)  # Client.get of an active client
         if owner is not None and type(owner).__name__ == "Client":
-            _compute_distributed(image, writer, owner)
+            _compute_distributed(image, sink, owner, job)
         elif getattr(scheduler, "__module__", "") in ("dask.threaded", "dask.local"):
-            import dask.array as da
-
-            # The writer shares this process: dask writes each block as soon as it exists.
-            da.store(image, writer, lock=False, scheduler=scheduler)
+            _compute_local(image, sink, scheduler, job)
         else:
-            _compute_batches(image, writer, scheduler)
+            _compute_batches(image, sink, scheduler, job)
         return
     with _client(client) as c:
-        _compute_distributed(image, writer, c)
+        _compute_distributed(image, sink, c, job)
+
+
+def _compute_local(image, sink: _Sink, scheduler: Any, job: tuple) -> None:
+    """This process's threads (or the synchronous scheduler): one graph whose last step per
+    block stores it, so each block's result is dropped as soon as it is stored."""
+    import dask
+
+    def store(r0: int, c0: int, result: tuple) -> None:
+        sink(r0, c0, *result)
+
+    put = dask.delayed(store, pure=False)
+    dask.compute(*(put(r0, c0, task) for r0, c0, task in _block_tasks(image, job)),
+                 scheduler=scheduler)  # fmt: skip
 
 
 @contextmanager
@@ -473,39 +451,30 @@ def _client(client: Any) -> Iterator[Any]:
     yield client
 
 
-def _block_slices(image) -> Iterator[tuple[tuple[int, int], tuple[slice, slice]]]:
-    """Block index and (rows, cols) slices of every block, row-major."""
-    r_edges, c_edges = (np.cumsum((0, *c)) for c in image.chunks[:2])
-    for i in range(len(r_edges) - 1):
-        for j in range(len(c_edges) - 1):
-            yield (i, j), (slice(r_edges[i], r_edges[i + 1]), slice(c_edges[j], c_edges[j + 1]))
+def _compute_distributed(image, sink: _Sink, client: Any, job: tuple) -> None:
+    """Blocks computed and encoded on the cluster, gathered one by one as they finish, each
+    stored and released at once.
 
-
-def _compute_distributed(image, writer: _WindowWriter, client: Any) -> None:
-    """Blocks computed on the cluster and gathered one by one as they finish, each written
-    and released at once.
-
-    All blocks go to the scheduler as one graph: a map block needs its neighbours' input
-    chunks (the halo), and only within one graph is each input chunk read (or generated) once
-    and dropped when its last block is done (separate submissions read it up to nine times).
-    Memory stays bounded on the workers by dask's queuing of root tasks (inputs are produced
-    as fast as blocks finish) and in this process because writing a block takes far less
-    time than computing one.
+    All blocks go to the scheduler as one graph (:func:`_block_tasks`). Memory stays bounded
+    on the workers by dask's queuing of root tasks (inputs are produced as fast as blocks
+    finish) and in this process because a block's result is its encoded tiles (a fraction of
+    its pixels) and storing them takes far less time than computing them.
     """
     from distributed import KilledWorker, as_completed
 
     check_worker_memory(client, _block_shape(image))
-    items = list(_block_slices(image))
-    futures = client.compute([image.blocks[i, j] for (i, j), _ in items])
-    where = {f.key: slices for f, (_, slices) in zip(futures, items, strict=True)}
+    tasks = _block_tasks(image, job)
+    futures = client.compute([task for _, _, task in tasks])
+    where = {f.key: (r0, c0) for f, (r0, c0, _) in zip(futures, tasks, strict=True)}
+    del tasks
     queue = as_completed(futures)
-    del futures  # the queue holds them; each is released once its block is written
+    del futures  # the queue holds them; each is released once its block is stored
     try:
         for future in queue:
-            block = future.result()
-            writer[where.pop(future.key)] = block
+            result = future.result()
+            sink(*where.pop(future.key), *result)
             future.release()
-            del block
+            del result
     except KilledWorker as exc:
         # A task that killed its workers (dask's allowed-failures, 3 by default): almost always
         # the memory limit. Say so instead of dask's task key.
@@ -562,17 +531,17 @@ def check_chunk_memory(block: tuple[int, int], limit: int) -> None:
         )
 
 
-def _compute_batches(image, writer: _WindowWriter, scheduler: Any) -> None:
-    """Other local schedulers (processes): bounded batches of blocks, written in turn."""
+def _compute_batches(image, sink: _Sink, scheduler: Any, job: tuple) -> None:
+    """Other local schedulers (processes): bounded batches of blocks, each stored in turn."""
     import dask
 
     batch = 2 * (os.cpu_count() or 1)
-    items = list(_block_slices(image))
-    for k in range(0, len(items), batch):
-        part = items[k : k + batch]
-        blocks = dask.compute(*(image.blocks[i, j] for (i, j), _ in part), scheduler=scheduler)
-        for (_, slices), block in zip(part, blocks, strict=True):
-            writer[slices] = block
+    tasks = _block_tasks(image, job)
+    for k in range(0, len(tasks), batch):
+        part = tasks[k : k + batch]
+        results = dask.compute(*(task for _, _, task in part), scheduler=scheduler)
+        for (r0, c0, _), result in zip(part, results, strict=True):
+            sink(r0, c0, *result)
 
 
 def _overview_png(cog: Path, png: Path, size: int) -> None:

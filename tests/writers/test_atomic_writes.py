@@ -495,45 +495,28 @@ def test_temporary_names_are_unique(tmp_path):
     assert len(names) == 50 and _listing(tmp_path) == ["e.bin"]
 
 
-def test_a_signal_during_a_long_gdal_call_is_not_held_until_it_returns(tmp_path):
-    """The COG copy (minutes on a large map) runs in a helper thread (``cog._waiting``) so the
-    main thread still runs the signal handler: SIGTERM raises while GDAL is still copying
-    (called in the main thread, the handler would run only once the copy returned)."""
+def test_a_signal_during_a_cog_write_stops_it_and_leaves_nothing(tmp_path):
+    """SIGTERM while write_cog is encoding (tiles deflate on helper threads, the main thread
+    stores them) raises at once in the main thread; the output, its scratch files and the
+    preview are all gone."""
     import threading
 
-    import rasterio
-    import rasterio.shutil
-
     from sciviz_gbuf._atomic import Interrupted, raising_signals
-    from sciviz_gbuf.writers import cog
+    from sciviz_gbuf.writers.cog import write_cog
 
-    src, dst = tmp_path / "src.tif", tmp_path / "dst.tif"
-    noise = np.random.default_rng(0).integers(0, 256, (4, 4000, 4000), dtype=np.uint8)
-    with rasterio.open(
-        src, "w", driver="GTiff", width=4000, height=4000, count=4, dtype="uint8", tiled=True,
-        transform=rasterio.transform.Affine(1, 0, 0, 0, -1, 4000), crs="EPSG:32633",
-    ) as f:  # fmt: skip
-        f.write(noise)
+    noise = np.random.default_rng(0).integers(0, 256, (4000, 4000, 4), dtype=np.uint8)
 
-    def signal_once_copying() -> None:
-        for _ in range(2000):
-            if dst.exists():
+    def signal_once_encoding() -> None:
+        for _ in range(4000):
+            if any(p.name.endswith(".tiles.part") for p in tmp_path.iterdir()):
                 break
-            time.sleep(0.005)
+            time.sleep(0.002)
         os.kill(os.getpid(), signal.SIGTERM)
 
-    threading.Thread(target=signal_once_copying, daemon=True).start()
-    still_copying = None
-    with raising_signals():
-        try:
-            cog._waiting(rasterio.shutil.copy, src, dst, driver="COG", COMPRESS="DEFLATE")
-        except Interrupted:
-            still_copying = [t for t in threading.enumerate() if t.name == "sciviz-gbuf-gdal"]
-    assert still_copying, "the signal was held until GDAL's copy returned"
-    still_copying[0].join(60.0)
-    assert cog._waiting(lambda a, b=1: a + b, 2, b=3) == 5
-    with pytest.raises(ZeroDivisionError):
-        cog._waiting(lambda: 1 / 0)
+    threading.Thread(target=signal_once_encoding, daemon=True).start()
+    with pytest.raises(Interrupted), raising_signals():
+        write_cog(noise, tmp_path / "m.tif", transform=TRANSFORM, overview_png=tmp_path / "o.png")
+    assert _listing(tmp_path) == []
 
 
 @pytest.mark.parametrize("step", [1, 2], ids=["while-redirecting", "while-restoring"])

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
 
@@ -84,24 +86,27 @@ def test_sync_scheduler_and_bounded_batches(tmp_path):
     import dask
     from dask.local import get_sync
 
-    from sciviz_gbuf.writers import cog
-
     image = _rgba((700, 600), (512, 512))
     with dask.config.set(scheduler="sync"):
         out = write_cog(image, tmp_path / "s.tif", transform=TRANSFORM)
     np.testing.assert_array_equal(_read(out), image.compute())
 
-    # The path of process pools and other schedulers that return results to this process.
-    class Sink:
-        def __init__(self):
-            self.image = np.zeros(image.shape, np.uint8)
+    # The path of process pools and other schedulers that return results to this process:
+    # any scheduler dask's threads and local schedulers are not.
+    def elsewhere(dsk, keys, **kwargs):
+        return get_sync(dsk, keys, **kwargs)
 
-        def __setitem__(self, key, block):
-            self.image[key[0], key[1]] = block
+    calls = []
 
-    sink = Sink()
-    cog._compute_batches(image, sink, get_sync)
-    np.testing.assert_array_equal(sink.image, image.compute())
+    def counting(dsk, keys, **kwargs):
+        calls.append(len(keys))
+        return elsewhere(dsk, keys, **kwargs)
+
+    with dask.config.set(scheduler=counting):
+        out = write_cog(image, tmp_path / "b.tif", transform=TRANSFORM)
+    np.testing.assert_array_equal(_read(out), image.compute())
+    assert calls and all(n <= 2 * (os.cpu_count() or 1) for n in calls)
+    assert sum(calls) == 4  # 2 x 2 blocks, in batches
 
 
 def test_local_cluster_two_worker_processes(tmp_path):
@@ -227,3 +232,157 @@ def test_cli_topo_bad_chunks(dem_tif, tmp_path, capsys):
     with pytest.raises(SystemExit):
         main(["topo", str(dem_tif), "-o", str(tmp_path / "m.tif"), "--chunks", "0"])
     assert "chunk size" in capsys.readouterr().err
+
+
+# ------------------------------------------------------------------ the COG layout itself
+def _map_like(h: int, w: int) -> np.ndarray:
+    """An RGBA map-like image: smooth colours (they compress, as maps do), a transparent
+    (nodata) disc and a few noisy tiles (they do not)."""
+    y, x = np.mgrid[0:h, 0:w]
+    rgba = np.stack(
+        [
+            x * 255 // max(w - 1, 1),
+            y * 255 // max(h - 1, 1),
+            (x + y) // 7 % 256,
+            np.full_like(x, 255),
+        ],
+        axis=-1,
+    ).astype(np.uint8)
+    rgba[(x - w // 3) ** 2 + (y - h // 2) ** 2 < (min(h, w) // 4) ** 2, 3] = 0
+    rgba[: h // 5, w // 2 :] = np.random.default_rng(1).integers(
+        0, 256, rgba[: h // 5, w // 2 :].shape
+    )
+    return rgba
+
+
+def _mean_level(a: np.ndarray) -> np.ndarray:
+    """The next overview level by float arithmetic (an independent statement of the
+    writer's integer one): the mean of the 2 x 2 pixels present; colour weighted by alpha."""
+    h, w, c = a.shape
+    f = np.zeros((h + h % 2, w + w % 2, c))
+    f[:h, :w] = a
+    n = np.zeros((h + h % 2, w + w % 2))
+    n[:h, :w] = 1.0
+
+    def s(v):
+        return v[0::2, 0::2] + v[1::2, 0::2] + v[0::2, 1::2] + v[1::2, 1::2]
+
+    out = np.empty((f.shape[0] // 2, f.shape[1] // 2, c))
+    if c == 4:
+        alpha = s(f[..., 3])
+        for b in range(3):
+            with np.errstate(invalid="ignore", divide="ignore"):
+                out[..., b] = np.where(alpha > 0, s(f[..., b] * f[..., 3]) / alpha, 0.0)
+        out[..., 3] = alpha / s(n)
+    else:
+        for b in range(c):
+            out[..., b] = s(f[..., b]) / s(n)
+    return np.floor(out + 0.5).astype(np.uint8)
+
+
+@pytest.mark.parametrize("shape", [(1300, 2100, 4), (1025, 513, 3), (700, 1500, 1)])
+def test_overview_levels_are_the_means_of_the_level_below(tmp_path, shape):
+    image = _map_like(*shape[:2])[..., : shape[2]]
+    written = image[..., 0] if shape[2] == 1 else image  # grey goes in as (H, W)
+    out = write_cog(written, tmp_path / "o.tif", transform=TRANSFORM, crs=CRS)
+    level = image
+    with rasterio.open(out) as src:
+        n_overviews = len(src.overviews(1))
+    assert n_overviews >= 1
+    for k in range(n_overviews):
+        level = _mean_level(level)
+        with rasterio.open(out, overview_level=k) as src:
+            got = np.moveaxis(src.read(), 0, 2)
+        np.testing.assert_array_equal(got, level, err_msg=f"overview {k}")
+    assert max(level.shape[:2]) <= 512 < max(level.shape[0] * 2, level.shape[1] * 2)
+
+
+@pytest.mark.parametrize("chunks", [(512, 512), (1024, 2048), (700, 1300), (2048, 512)])
+def test_the_file_does_not_depend_on_the_chunks(tmp_path, chunks):
+    """Where a tile is encoded (a chunk of any size, or the in-memory path) does not change a
+    byte of the file."""
+    image = _map_like(2300, 2700)
+    whole = write_cog(image, tmp_path / "whole.tif", transform=TRANSFORM, crs=CRS)
+    lazy = da.from_array(image, chunks=(*chunks, 4))
+    part = write_cog(lazy, tmp_path / "lazy.tif", transform=TRANSFORM, crs=CRS)
+    assert whole.read_bytes() == part.read_bytes()
+
+
+def test_an_independent_tiff_reader_agrees(tmp_path):
+    """tifffile (its own TIFF decoder) reads every level's pixels, and finds GDAL's COG
+    layout: directories before the data, the smallest level's tiles first, each level's
+    tiles in row-major order with GDAL's size leader and repeated-last-4-bytes trailer."""
+    tifffile = pytest.importorskip("tifffile")
+    image = _map_like(1900, 2600)
+    out = write_cog(image, tmp_path / "t.tif", transform=TRANSFORM, crs=CRS)
+    raw = out.read_bytes()
+    assert b"LAYOUT=IFDS_BEFORE_DATA" in raw[:200]
+    level = image
+    with tifffile.TiffFile(out) as tif:
+        pages = tif.pages
+        assert len(pages) == 4  # 2600 -> 1300 -> 650 -> 325
+        last_ifd = max(p.offset for p in pages)
+        first_tile = []
+        for k, page in enumerate(pages):
+            if k:
+                level = _mean_level(level)
+            np.testing.assert_array_equal(page.asarray(), level, err_msg=f"level {k}")
+            assert (page.tilewidth, page.tilelength, page.predictor) == (512, 512, 2)
+            offsets, counts = page.dataoffsets, page.databytecounts
+            assert list(offsets) == sorted(offsets) and offsets[0] > last_ifd
+            first_tile.append(offsets[0])
+            for off, n in zip(offsets, counts, strict=True):
+                assert int.from_bytes(raw[off - 4 : off], "little") == n
+                assert raw[off + n - 4 : off + n] == raw[off + n : off + n + 4]
+        assert first_tile == sorted(first_tile, reverse=True)  # smallest level first
+
+
+def test_gdal_cog_validator(tmp_path):
+    """GDAL's own validate_cloud_optimized_geotiff.py, full check (leaders and trailers), if
+    a Python with GDAL's bindings is on this machine."""
+    import shutil
+    import subprocess
+
+    script = None
+    for python in ("/usr/bin/python3", shutil.which("python3")):
+        if not python:
+            continue
+        found = subprocess.run(
+            [
+                python,
+                "-c",
+                "import osgeo_utils.samples.validate_cloud_optimized_geotiff as v; "
+                "print(v.__file__)",
+            ],
+            capture_output=True,
+            text=True,
+        )
+        if found.returncode == 0:
+            script = (python, found.stdout.strip())
+            break
+    if script is None:
+        pytest.skip("no Python with GDAL's bindings (osgeo_utils) on this machine")
+    out = write_cog(_map_like(1300, 1700), tmp_path / "v.tif", transform=TRANSFORM, crs=CRS)
+    run = subprocess.run([*script, "--full-check=yes", str(out)], capture_output=True, text=True)
+    assert run.returncode == 0 and "is a valid cloud optimized GeoTIFF" in run.stdout, (
+        run.stdout + run.stderr
+    )
+
+
+def test_bigtiff_when_classic_offsets_cannot_reach(tmp_path, monkeypatch):
+    from sciviz_gbuf.writers import _cog_layout
+
+    image = _map_like(900, 1100)
+    monkeypatch.setattr(_cog_layout, "CLASSIC_LIMIT", 1000)
+    out = write_cog(image, tmp_path / "big.tif", transform=TRANSFORM, crs=CRS)
+    assert out.read_bytes()[:4] == b"II+\x00"
+    _assert_cog(out, image)
+
+
+def test_one_tile_and_one_pixel(tmp_path):
+    for shape in [(512, 512, 4), (1, 1, 3), (1, 600, 1)]:
+        image = _map_like(*shape[:2])[..., : shape[2]]
+        written = image[..., 0] if shape[2] == 1 else image
+        out = write_cog(written, tmp_path / f"s{shape[0]}x{shape[1]}.tif", transform=TRANSFORM)
+        check_cog(out)
+        np.testing.assert_array_equal(_read(out), image)
