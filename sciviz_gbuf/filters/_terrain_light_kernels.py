@@ -219,6 +219,175 @@ def _shadow_rows(
                 out[i, j] = (math.acos(s) - s * math.sqrt(1.0 - s * s)) / math.pi
 
 
+#: "No terrain" in the sweep's shadow surface: finite, so interpolating it with a height
+#: stays far below any terrain instead of giving NaN (-inf + inf).
+_NOTHING = -1e300
+
+
+def shadow_sweep_kernel(
+    z: np.ndarray, d_row: float, d_col: float, step_len: float, altitude: float
+) -> np.ndarray:
+    """Hard shadows of ``z`` by one sweep away from the sun (the rays of
+    :func:`shadow_kernel`: ``(d_row, d_col)`` cells a step, one of them +-1).
+
+    Every ray towards the sun lies on a straight line of the grid's family ``column = u +
+    row e`` (rows-major rays, ``e`` columns a row; the same with rows and columns swapped).
+    The sweep keeps, for the lines at integer ``u``, the *shadow surface* ``S_u``: the
+    highest of the heights sampled along the line so far (interpolated across the row, as
+    the march samples) less ``tan(altitude)`` times their distance. Row by row from the side
+    of the sun, a cell is shadowed where the surface of its own line passes above it; then
+    the row's samples join the lines and every surface drops by one step. A cell on an
+    integer line (rays along the rows, the columns, or with square cells the diagonals) is
+    tested against exactly the march's samples. A cell between two lines gets the
+    interpolation of their two surfaces: each carries its line's highest sample undamped to
+    any distance, so shadows keep their length; their sides move by up to about a cell
+    (tested against the march). O(1) per cell, whatever the shadows' length."""
+    h, w = z.shape
+    out = np.empty((h, w), dtype=np.float32)
+    # float64 surfaces: a ray that grazes a cell (a 45-degree sun over integer heights) must
+    # fall on the side the march's float64 comparison puts it
+    drop = math.tan(math.radians(altitude)) * step_len
+    if abs(d_row) == 1.0:  # lines across rows
+        e = float(d_row) * float(d_col)  # columns per row away from row 0
+        s = np.empty(_n_lines(h, w, e))
+        _shadow_sweep_rows(z, int(d_row), e, drop, out, s)
+    else:  # lines across columns, the columns swept in strips copied into row buffers
+        e = float(d_col) * float(d_row)
+        s = np.empty(_n_lines(w, h, e))
+        zt = np.empty((_STRIP, h + _PAD), z.dtype)
+        lt = np.empty((_STRIP, h + _PAD), np.float32)
+        _shadow_sweep_cols(z, int(d_col), e, drop, out, s, zt, lt)
+    return out
+
+
+def _n_lines(n_steps: int, n: int, e: float) -> int:
+    """Lines ``u`` of the family ``x = u + k e`` (k = 0 .. n_steps - 1) that cross a line of
+    ``n`` cells, with a margin for interpolation."""
+    return n + math.ceil(abs(e) * (n_steps - 1)) + 3
+
+
+#: Columns copied at a time by the column sweep, into rows padded by a few cells: rows a
+#: power of two apart map to the same cache set, and the copy touches all of them at once.
+_STRIP, _PAD = 64, 16
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _sweep_line(zi: np.ndarray, k: int, e: float, u0: int, s: np.ndarray, oi: np.ndarray,
+                drop: float) -> None:  # fmt: skip
+    """Line ``k`` of cells (``k = i`` for the grid's row i) of the sweep: the cells tested
+    against the surfaces ``s`` of the lines through them (``s[L]`` is line ``u = L + u0``),
+    then the cells' heights join the lines, then the surfaces drop one step."""
+    n = zi.shape[0]
+    p = k * e  # line u crosses this line of cells at x = u + p
+    fl = math.floor(p)
+    phi = p - fl
+    # the cell j lies on line u = j - p: between lines a = j - fl - 1 and a + 1 (weight g)
+    if phi > 0.0:
+        g = 1.0 - phi
+        base = -fl - 1 - u0
+        _sweep_query(s[base : base + n], s[base + 1 : base + 1 + n], g, zi, oi)
+    else:
+        base = -fl - u0
+        _sweep_query(s[base : base + n], s[base : base + n], 0.0, zi, oi)
+    # lines whose crossing (and its interpolation neighbour) lies inside: x = L + u0 + fl + phi
+    c_lo = 0
+    c_hi = n - 1 if phi > 0.0 else n  # cells c with c + 1 <= n - 1 when interpolating
+    off = u0 + fl  # cell c = L + off
+    la = c_lo - off
+    lb = c_hi - off
+    if phi > 0.0:
+        _sweep_join_lerp(zi[c_lo:c_hi], zi[c_lo + 1 : c_hi + 1], phi, s[la:lb])
+    else:
+        _sweep_join(zi[c_lo:c_hi], s[la:lb])
+    _sweep_drop(s, drop)
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _sweep_query(a: np.ndarray, b: np.ndarray, g: float, zi: np.ndarray, oi: np.ndarray) -> None:
+    """Shadow where the surface between lines ``a`` and ``b`` (weight ``g``) passes above
+    the cell; NaN at nodata."""
+    for j in range(zi.shape[0]):
+        v = np.float64(zi[j])
+        sj = a[j] + g * (b[j] - a[j])
+        lit = np.float32(0.0) if sj > v else np.float32(1.0)
+        oi[j] = lit if v == v else np.float32(np.nan)
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _sweep_join_lerp(a: np.ndarray, b: np.ndarray, f: float, s: np.ndarray) -> None:
+    """The heights between cells ``a`` and ``b`` (weight ``f``) join the lines' surfaces
+    (a sample touching nodata is skipped: NaN compares False)."""
+    for j in range(s.shape[0]):
+        v = a[j] + f * (np.float64(b[j]) - a[j])
+        s[j] = v if v > s[j] else s[j]
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _sweep_join(a: np.ndarray, s: np.ndarray) -> None:
+    for j in range(s.shape[0]):
+        v = np.float64(a[j])
+        s[j] = v if v > s[j] else s[j]
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _sweep_drop(s: np.ndarray, drop: float) -> None:
+    for j in range(s.shape[0]):
+        s[j] -= drop
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _shadow_sweep_rows(
+    z: np.ndarray, di: int, e: float, drop: float, out: np.ndarray, s: np.ndarray
+) -> None:
+    """The row sweep of :func:`shadow_sweep_kernel`: rows from the sun's side (the rays of
+    row i go to row i + di)."""
+    h = z.shape[0]
+    u0 = math.floor(min(0.0, -e * (h - 1))) - 1
+    for j in range(s.shape[0]):
+        s[j] = _NOTHING
+    for n in range(h):
+        i = n if di < 0 else h - 1 - n
+        _sweep_line(z[i], i, e, u0, s, out[i], drop)
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _shadow_sweep_cols(
+    z: np.ndarray, dj: int, e: float, drop: float, out: np.ndarray, s: np.ndarray,
+    zt: np.ndarray, lt: np.ndarray,
+) -> None:  # fmt: skip
+    """The column sweep: columns from the sun's side, ``zt.shape[0]`` at a time copied into
+    the rows of ``zt`` (contiguous lines, without transposing the grid), their shadows from
+    ``lt`` back into ``out``."""
+    h, w = z.shape
+    m = zt.shape[0]
+    u0 = math.floor(min(0.0, -e * (w - 1))) - 1
+    for j in range(s.shape[0]):
+        s[j] = _NOTHING
+    for n0 in range(0, w, m):
+        k = min(m, w - n0)
+        # the strip's columns, in sweep order: n0 .. n0 + k - 1 from the sun's side
+        lo = n0 if dj < 0 else w - n0 - k
+        for i in range(h):
+            zr = z[i]
+            if dj < 0:
+                for q in range(k):
+                    zt[q, i] = zr[lo + q]
+            else:
+                for q in range(k):
+                    zt[q, i] = zr[lo + k - 1 - q]
+        for q in range(k):
+            col = lo + q if dj < 0 else lo + k - 1 - q
+            _sweep_line(zt[q, :h], col, e, u0, s, lt[q, :h], drop)
+        for i in range(h):
+            orow = out[i]
+            if dj < 0:
+                for q in range(k):
+                    orow[lo + q] = lt[q, i]
+            else:
+                for q in range(k):
+                    orow[lo + k - 1 - q] = lt[q, i]
+
+
 def _march_steps(step_lens: np.ndarray, radius: float, h: int, w: int) -> np.ndarray:
     """The steps each direction's ray takes within ``radius`` metres (at most ``h + w``), in
     float64 arithmetic as the band kernels used to take them."""

@@ -154,13 +154,23 @@ def cast_shadows(
     z_factor: float = 1.0,
     sun_radius: float = 0.0,
     mask: np.ndarray | None = None,
+    method: str = "sweep",
 ) -> np.ndarray:
     """Shadows cast by the terrain on itself under a directional sun (rayshader's ``ray_shade``).
 
-    From every cell a ray is marched towards the sun, one pixel per step along its dominant axis
-    with the terrain linearly interpolated across the other axis; the cell is in shadow if a
-    sample rises above the ray. The march stops at the grid edge (beyond it nothing blocks) or
-    once the ray is above every cell it could still meet (row, column maxima ahead).
+    A ray from every cell towards the sun, one pixel per step along its dominant axis with the
+    terrain linearly interpolated across the other axis: the cell is in shadow if a sample
+    rises above the ray. Beyond the grid edge nothing blocks. Hard shadows (``sun_radius=0``)
+    are found by one sweep away from the sun (``method="sweep"``, the default): for a family
+    of parallel lines towards the sun through the grid, the *shadow surface* (the highest
+    sample so far less ``tan(altitude)`` times its distance) is carried row by row (or column
+    by column), O(1) per cell whatever the shadows' length. Along the grid's axes and (square
+    cells) its diagonals the lines pass through the cells and the sweep marks exactly the
+    march's shadows; at other azimuths a cell between two lines gets the interpolation of
+    their surfaces, which keeps shadows' lengths and moves their sides by up to about a cell
+    (on a real SRTM DEM about 1 % of the cells differ, all at shadow edges; tested against
+    ``method="march"``, which marches every cell's ray and stops once the ray is above every
+    cell it could still meet). Soft shadows always march.
 
     Parameters
     ----------
@@ -181,6 +191,8 @@ def cast_shadows(
         true sun is ~0.27 degrees). The horizon is taken as straight across the disc.
     mask : (H, W) bool, optional
         False marks nodata cells, like NaN heights.
+    method : {"sweep", "march"}, default: "sweep"
+        How hard shadows are found (above); ``sun_radius > 0`` marches either way.
 
     Returns
     -------
@@ -194,15 +206,17 @@ def cast_shadows(
     cells (as in rayshader), except for the cells at the grid edge towards the sun, which have no
     terrain beyond them. A discrete grid cannot tell such self-shadow from a cast shadow on curved
     ground; multiply with :func:`~sciviz_gbuf.filters.hillshade.hillshade`, which is 0 on those
-    slopes anyway. Cost is about (shadow length in pixels) per cell: low suns are slower.
+    slopes anyway. The march costs about (shadow length in pixels) per cell, so low suns are
+    slower; the sweep costs the same at any sun.
 
     Raises
     ------
     InputError
         ``heights`` not 2-D or ``mask`` of another shape; ``dx``/``dy`` not finite and positive;
         ``altitude`` outside (0, 90]; non-finite ``azimuth``/``z_factor``; ``sun_radius`` out of
-        range.
+        range; ``method`` not one of the two.
     """
+    method = _validate.choice(method, "method", ("sweep", "march"))
     for name, value in (("azimuth", azimuth), ("altitude", altitude), ("sun_radius", sun_radius)):
         _validate.finite(value, name)
     if not 0.0 < float(altitude) <= 90.0:
@@ -223,6 +237,8 @@ def cast_shadows(
     if float(altitude) == 90.0 or z.size == 0:
         return np.where(np.isnan(z), np.float32(np.nan), np.float32(1.0))
     d_row, d_col, step_len = _ray_steps(float(azimuth), float(dx), float(dy))
+    if method == "sweep" and float(sun_radius) == 0.0:
+        return _k.shadow_sweep_kernel(z, d_row, d_col, step_len, float(altitude))
     rows, cols = _k.line_max(z)
     return _k.shadow_kernel(
         z,
