@@ -8,7 +8,10 @@ Run from the project root with the project's venv active::
 What is measured, on synthetic fractal terrain (spectral synthesis, power ~ 1/f^2.2, 30 m cells,
 ~1500 m of relief, float32):
 
-* ``cast_shadows`` at azimuth 315 and altitude 30 (hard shadows) and with ``sun_radius=0.5``;
+* ``cast_shadows`` at azimuth 315 and altitude 30: hard shadows by the sweep (also at azimuth
+  300: its lines cross the columns, which it copies in strips) and by the per-cell march it
+  keeps as ``method="march"``, with the share of cells where the two differ; and soft shadows
+  (``sun_radius=0.5``, always the march);
   ``sky_view`` and ``openness`` with 16 directions and the default radius (50 cells, 1500 m);
   up to 2048^2 also the per-cell ray march ``sky_view`` ran before its row march (the same
   samples, kept as the reference the tests hold the row march to).
@@ -134,7 +137,7 @@ def main(argv: list[str] | None = None) -> int:
     sky_view(warm, dx=CELL, dy=CELL)
 
     header = (
-        f"{'function':<30} {'size':>6} {'best s':>8} {'MPix/s':>8} {'x hillshade':>12} {'cores':>6}"
+        f"{'function':<34} {'size':>6} {'best s':>8} {'MPix/s':>8} {'x hillshade':>12} {'cores':>6}"
     )
     print(header)
     print("-" * len(header))
@@ -145,7 +148,12 @@ def main(argv: list[str] | None = None) -> int:
         sun = {"azimuth": AZIMUTH, "altitude": ALTITUDE, "dx": CELL, "dy": CELL}
         cells: list[tuple[str, Callable[[], object]]] = [
             ("hillshade (peer)", partial(hillshade, z, **sun)),
-            ("cast_shadows", partial(cast_shadows, z, **sun)),
+            ("cast_shadows (sweep)", partial(cast_shadows, z, **sun)),
+            (
+                "cast_shadows azimuth 300 (sweep)",
+                partial(cast_shadows, z, **{**sun, "azimuth": 300.0}),
+            ),
+            ("cast_shadows method=march", partial(cast_shadows, z, method="march", **sun)),
             ("cast_shadows sun_radius=0.5", partial(cast_shadows, z, sun_radius=0.5, **sun)),
             ("sky_view 16 dirs r=50 px", partial(sky_view, z, dx=CELL, dy=CELL)),
             ("openness 16 dirs r=50 px", partial(openness, z, dx=CELL, dy=CELL)),
@@ -159,9 +167,10 @@ def main(argv: list[str] | None = None) -> int:
         for name, fn in cells:
             t, cores = best_time(fn, args.min_repeats, args.target)
             base = base or t
-            print(f"{name:<30} {n:>6} {t:>8.3f} {mpix / t:>8.1f} {t / base:>12.1f} {cores:>6.2f}")
-        lit = float(np.mean(cast_shadows(z, **sun)))
-        print(f"{'  (lit share)':<30} {n:>6} {lit:>8.3f}")
+            print(f"{name:<34} {n:>6} {t:>8.3f} {mpix / t:>8.1f} {t / base:>12.1f} {cores:>6.2f}")
+        sweep, march = cast_shadows(z, **sun), cast_shadows(z, method="march", **sun)
+        print(f"{'  (lit share)':<34} {n:>6} {float(np.mean(sweep)):>8.3f}")
+        print(f"{'  (sweep != march share)':<34} {n:>6} {float(np.mean(sweep != march)):>8.4f}")
 
     n = min(args.sizes)
     z = fractal_terrain(n)
@@ -170,8 +179,9 @@ def main(argv: list[str] | None = None) -> int:
     print(f"numpy references on {n}^2 (sky view on a 512^2 crop):")
     want = numpy_west_shadows(z, ALTITUDE, CELL)
     t_np, _ = best_time(partial(numpy_west_shadows, z, ALTITUDE, CELL), 1, 0.0)
-    t_nb, _ = best_time(partial(cast_shadows, z, azimuth=270.0, altitude=ALTITUDE, **kw), 3, 1.0)
-    same = np.array_equal(want, cast_shadows(z, azimuth=270.0, altitude=ALTITUDE, **kw))
+    west = partial(cast_shadows, z, azimuth=270.0, altitude=ALTITUDE, **kw)
+    t_nb, _ = best_time(west, 3, 1.0)
+    same = np.array_equal(want, west())
     print(
         f"  shadows azimuth 270: numpy {t_np:.3f} s, cast_shadows {t_nb:.3f} s, "
         f"speed-up {t_np / t_nb:.1f}x, identical: {same}"
