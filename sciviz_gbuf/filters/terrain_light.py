@@ -168,7 +168,7 @@ def cast_shadows(
     cells) its diagonals the lines pass through the cells and the sweep marks exactly the
     march's shadows; at other azimuths a cell between two lines gets the interpolation of
     their surfaces, which keeps shadows' lengths and moves their sides by up to about a cell
-    (on a real SRTM DEM about 1 % of the cells differ, all at shadow edges; tested against
+    (on a real SRTM DEM up to 1 % of the cells differ, nearly all at shadow edges; tested against
     ``method="march"``, which marches every cell's ray and stops once the ray is above every
     cell it could still meet). Soft shadows always march.
 
