@@ -134,6 +134,7 @@ def _all_steps() -> Iterator[Callable[[], object]]:
     yield lambda: (filters.profile_edges(g1), filters.internal_edges(g1), filters.id_edges(g1))
     yield lambda: filters.crease_edges(g2)
     yield lambda: (filters.sky_view(z), filters.cast_shadows(z, sun_radius=0.3))
+    yield lambda: (filters.cast_shadows(z), filters.cast_shadows(z, azimuth=290.0))
     yield lambda: (filters.openness(z), topographic_map(z, relief="vat", labels=True))
     yield lambda: topographic_map(z, sky_view=True)
     yield lambda: (filters.color_bands(z, interval=5.0), filters.hillshade(z))

@@ -308,7 +308,7 @@ def composite_map(
         return empty if a is None else _validate.image(a, name)
 
     out = np.empty((*z.shape, 4), dtype=np.uint8)
-    _bk.map_image(
+    _bk.map_image_fast(
         z,
         tables is not None,
         *colours,
