@@ -170,8 +170,14 @@ def color_bands(
     m = _validate.mask(mask, v.shape)
     valid = np.isfinite(v) if m is None else np.isfinite(v) & m
     any_valid = bool(valid.any())
+    extremes = np.zeros(1, np.float32)
+    if any_valid and (vmin is None or vmax is None):
+        # the tables need the valid heights' range only: no copy of the valid heights
+        extremes = np.array(
+            [np.min(v, where=valid, initial=np.inf), np.max(v, where=valid, initial=-np.inf)]
+        )
     tables = band_tables(
-        v[valid] if any_valid and (vmin is None or vmax is None) else np.zeros(1, np.float32),
+        extremes,
         interval=interval,
         levels=levels,
         base=base,
