@@ -269,15 +269,18 @@ class TileStore:
             at += len(data)
 
     def level(self, k: int) -> np.ndarray:
-        """The pixels of level ``k`` (filled by :meth:`put`), in memory or a scratch file."""
-        if k not in self._levels:
-            a, b = self.shapes[k]
-            shape = (a, b, self.shape[2])
-            if a * b * self.shape[2] > _IN_MEMORY_LEVEL:
-                self._levels[k] = np.memmap(self._scratch(f"level{k}"), np.uint8, "w+", shape=shape)
-            else:
-                self._levels[k] = np.zeros(shape, np.uint8)
-        return self._levels[k]
+        """The pixels of level ``k`` (filled by :meth:`put`), in memory or a scratch file;
+        made once, whichever thread asks first."""
+        with self._lock:
+            if k not in self._levels:
+                a, b = self.shapes[k]
+                shape = (a, b, self.shape[2])
+                if a * b * self.shape[2] > _IN_MEMORY_LEVEL:
+                    path = self._scratch(f"level{k}")
+                    self._levels[k] = np.memmap(path, np.uint8, "w+", shape=shape)
+                else:
+                    self._levels[k] = np.zeros(shape, np.uint8)
+            return self._levels[k]
 
     def put(self, k: int, r0: int, c0: int, piece: np.ndarray) -> None:
         """Place a block's piece of level ``k`` at pixel (r0, c0) of that level."""
