@@ -228,7 +228,7 @@ def write_cog(
     ):
         store = TileStore((h, w, c), lambda tag: scratch.enter_context(scratch_file(out, tag)))
         scratch.callback(store.close)
-        sink = _Sink(store, top, n_levels, bar, n_blocks)
+        sink = _Sink(store, top, bar, n_blocks)
         job = (top, n_levels, zlevel)
         if is_lazy:
             _compute_into(pixels, sink, client, job)
@@ -258,12 +258,21 @@ def _steps(n: int, step: int) -> tuple[int, ...]:
     return tuple(min(step, n - s) for s in range(0, n, step))
 
 
+def _block_origins(chunks: Sequence[Sequence[int]]) -> list[tuple[int, int, int, int]]:
+    """``(i, j, r0, c0)``: index and first pixel of every block of a grid of ``chunks``,
+    row-major."""
+    r_edges, c_edges = (np.cumsum((0, *c))[:-1] for c in chunks[:2])
+    return [
+        (i, j, int(r0), int(c0)) for i, r0 in enumerate(r_edges) for j, c0 in enumerate(c_edges)
+    ]
+
+
 class _Sink:
     """Stores the encoded tiles of a block and places its piece of the first level this
     process encodes; one call per block, from any thread."""
 
-    def __init__(self, store: TileStore, top: int, n_levels: int, bar: Any, total: int) -> None:
-        self.store, self.top, self.n_levels, self.bar, self.total = store, top, n_levels, bar, total
+    def __init__(self, store: TileStore, top: int, bar: Any, total: int) -> None:
+        self.store, self.top, self.bar, self.total = store, top, bar, total
         self.done = 0
         self.lock = threading.Lock()
 
@@ -280,19 +289,15 @@ class _Sink:
 def _encode_numpy(pixels: np.ndarray, chunks: tuple, sink: _Sink, job: tuple) -> None:
     """An in-memory image: its blocks encoded on this process's threads (deflate and numpy
     release the GIL)."""
-    starts = [np.cumsum((0, *c))[:-1] for c in chunks]
-    blocks = [(int(r0), int(c0)) for r0 in starts[0] for c0 in starts[1]]
     rows, cols = chunks
 
-    def run(rc: tuple[int, int]) -> None:
-        r0, c0 = rc
-        i = int(np.searchsorted(starts[0], r0))
-        j = int(np.searchsorted(starts[1], c0))
+    def run(origin: tuple[int, int, int, int]) -> None:
+        i, j, r0, c0 = origin
         block = pixels[r0 : r0 + rows[i], c0 : c0 + cols[j]]
         sink(r0, c0, *encode_block(block, r0, c0, *job))
 
     with ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as pool:
-        for _ in pool.map(run, blocks):
+        for _ in pool.map(run, _block_origins(chunks)):
             pass
 
 
@@ -376,13 +381,11 @@ def _block_tasks(image, job: tuple) -> list[tuple[int, int, Any]]:
     within one graph is each input chunk read (or generated) once."""
     import dask
 
-    r_edges, c_edges = (np.cumsum((0, *c))[:-1] for c in image.chunks[:2])
     blocks = image.to_delayed()
     encode = dask.delayed(encode_block, pure=True)
     return [
-        (int(r0), int(c0), encode(blocks[i, j, 0], int(r0), int(c0), *job))
-        for i, r0 in enumerate(r_edges)
-        for j, c0 in enumerate(c_edges)
+        (r0, c0, encode(blocks[i, j, 0], r0, c0, *job))
+        for i, j, r0, c0 in _block_origins(image.chunks)
     ]
 
 
