@@ -17,6 +17,9 @@ On synthetic fractal terrain (float32, 10 m cells, 0-2000 m, power ~ 1/f^2.2), i
 * matplotlib's ``LightSource.hillshade`` (numpy) and ``gdaldem hillshade -compute_edges``
   (a process reading and writing raw ENVI files on the same disk; its I/O is included, so the
   ratio flatters us by that much: the file read alone is listed);
+* the map's other per-pixel passes: its fused composite (band colours x relief, then contour
+  ink, into a preallocated uint8 RGBA), against the per-pixel loop it ran before (kept as the
+  reference), and ``color_bands`` into a new float32 RGBA (16 bytes a cell);
 * the grey levels: our Byte output, ``round(1 + 254 shade)``, against gdaldem's on the same
   grid (max and share of cells that differ).
 
@@ -39,8 +42,10 @@ import numpy as np
 if not os.environ.get("DISPLAY"):
     os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
 
+from sciviz_gbuf.filters import _band_kernels as BK
 from sciviz_gbuf.filters import _hillshade_kernels as K
-from sciviz_gbuf.filters import hillshade
+from sciviz_gbuf.filters import color_bands, hillshade
+from sciviz_gbuf.filters.bands import _check_tables, band_tables
 
 CELL = 10.0
 VARIANTS = ("regular", "combined", "multidirectional", "igor")
@@ -129,6 +134,23 @@ def main() -> None:
                 ref = row("per-cell float64 statement (before)",
                           lambda z=z: K.hillshade_reference_kernel(
                               z, 1 / CELL, -1 / CELL, 1.0, 315.0, 45.0, 0, 0), reps=1)  # fmt: skip
+        # the map's other per-pixel passes: its composite (bands x relief, then contour ink,
+        # uint8 RGBA) and the float colour bands
+        tables = _check_tables(band_tables(
+            np.array([z.min(), z.max()]), interval=100.0, levels=None, base=0.0, cmap=None,
+            vmin=None, vmax=None, sea_level=None, sea_cmap=None))  # fmt: skip
+        relief = hillshade(z, dx=CELL, dy=CELL)
+        ink = np.where(relief > 0.95, np.float32(1.0), np.float32(0.0))
+        none = np.zeros((0, 0), np.float32)
+        rgba = np.empty((n, n, 4), np.uint8)
+        layers = (z, True, *tables, True, relief, np.float32(0.7), none, none, ink,
+                  np.zeros(3, np.float32))  # fmt: skip
+        row("map composite, out= (vectorised loops)",
+            lambda a=layers, o=rgba: BK.map_image_fast(*a, o))  # fmt: skip
+        row("map composite, out=, per-pixel loop (before)",
+            lambda a=layers, o=rgba: BK.map_image(*a, o), reps=1)  # fmt: skip
+        row("color_bands, new float32 RGBA", lambda z=z: color_bands(z, interval=100.0), reps=1)
+        del rgba, relief, ink
         ls = LightSource(azdeg=315, altdeg=45)
         row("matplotlib LightSource.hillshade",
             lambda z=z, ls=ls: ls.hillshade(z, dx=CELL, dy=CELL), reps=1)  # fmt: skip
