@@ -252,6 +252,14 @@ def _table_index(zi, rep, n_land, n_sea, lo_l, sc_l, lo_s, sc_s, sea_level, idx)
         idx[j] = np.int32(t) + (off_s if sea else np.int32(0))
 
 
+@njit(cache=True, inline="always")
+def _byte32(x):
+    """:func:`_to_byte` as a 32-bit word: the same value, but converted through int32, which
+    vectorises (a float-to-uint8 conversion does not: 4x slower)."""
+    x = min(max(x, np.float32(0.0)), np.float32(1.0))
+    return np.uint32(np.int32(np.rint(x * np.float32(255.0))))
+
+
 @njit(cache=True, nogil=True, _nrt=False)
 def _gather_row(idx, rgb, cr, cg, cb):
     """The colours of table rows ``idx`` (a loop of its own: a gather keeps the loop it is
@@ -292,9 +300,9 @@ def _light_row(zi, cr, cg, cb, relief, sh, flat, lit, sky, ink, ink_rgb, o):
         g = g * (one - c) + g_ink * c
         b = b * (one - c) + b_ink * c
         word = (
-            np.uint32(_to_byte(r))
-            | (np.uint32(_to_byte(g)) << np.uint32(8))
-            | (np.uint32(_to_byte(b)) << np.uint32(16))
+            _byte32(r)
+            | (_byte32(g) << np.uint32(8))
+            | (_byte32(b) << np.uint32(16))
             | np.uint32(0xFF000000)
         )
         v = zi[j]
