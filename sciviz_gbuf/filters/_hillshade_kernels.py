@@ -9,7 +9,7 @@ Two statements of one method:
   window holds nodata.
 - :func:`_hillshade_rows` takes each inner row in one branch-free float32 loop (the 3 x 3
   gradient as weighted differences, the variant's shade formula with selects instead of
-  branches; ``atan``/``acos`` by Cephes' float32 polynomial), which LLVM vectorises: about
+  branches; ``atan`` by Cephes' float32 polynomial), which LLVM vectorises: about
   20 x the per-cell loop. A nodata cell in the window makes the cell's float32 value NaN
   (NaN propagates; a nodata centre is folded in as ``+ (c - c)``), and such cells are done
   again by :func:`_pixel`. The two agree to float32 rounding (a few 1e-7 of the shade's
@@ -228,17 +228,6 @@ def atan_pos(t: np.float32) -> np.float32:
     return np.float32(math.pi / 2) - r if t > one else r
 
 
-@njit(cache=True, inline="always", error_model="numpy")
-def _atan2(y: np.float32, x: np.float32) -> np.float32:
-    """atan2(y, x) in (-pi, pi], float32, branch-free; 0 at (0, 0) as libm's atan2(+0, +0)."""
-    ax = abs(x)
-    ay = abs(y)
-    r = _atan_ratio(min(ax, ay), max(ax, ay))
-    r = np.float32(math.pi / 2) - r if ay > ax else r
-    r = np.float32(math.pi) - r if x < np.float32(0) else r
-    return -r if y < np.float32(0) else r
-
-
 @njit(cache=True, inline="always")
 def _gradient(zn: np.ndarray, zc: np.ndarray, zs: np.ndarray, j: int, cw: np.float32) -> tuple:
     """GDAL's 3x3 gradient sums at column ``j`` of the rows north, centre and south, in its
@@ -257,6 +246,76 @@ def _gradient(zn: np.ndarray, zc: np.ndarray, zs: np.ndarray, j: int, cw: np.flo
 def _clamp01(s: np.float32) -> np.float32:
     """``s`` clamped to [0, 1], NaN kept (``min``/``max`` may drop it)."""
     return np.float32(0) if s < np.float32(0) else (np.float32(1) if s > np.float32(1) else s)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _angle(y: np.float32, x: np.float32) -> np.float32:
+    """atan2(y, x) for y >= 0, in [0, pi], float32 (0 at (0, 0), as libm)."""
+    ax = abs(x)
+    r = _atan_ratio(min(ax, y), max(ax, y))
+    r = np.float32(math.pi / 2) - r if y > ax else r
+    return np.float32(math.pi) - r if x < np.float32(0) else r
+
+
+# The -combined and -igor rows: two arctangents a cell, compute-bound, so their loops may
+# contract a * b + c into fused multiply-adds (the gradient sums stay GDAL's: their products
+# are by 1 or 0, exact either way; the shade moves by float32 rounding, ~1e-7).
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy", fastmath={"contract"})
+def _combined_row(
+    zn: np.ndarray, zc: np.ndarray, zs: np.ndarray, o: np.ndarray, cw: np.float32,
+    ex: np.float32, ny: np.float32, sq: np.float32, sa: np.float32, ca: np.float32,
+    cu: np.float32, su: np.float32, inv_sq_half_pi: np.float32,
+) -> bool:  # fmt: skip
+    """Inner cells of one row of ``-combined`` into ``o``; True if one of them is NaN.
+
+    GDAL's ``acos(cang)`` with ``cang = (sin alt - cos alt u) / sqrt(1 + u^2 + v^2)`` (``u``,
+    ``v`` the scaled gradient along and across the light) is the angle between the light and
+    the normal, ``atan2(sqrt((cos alt + sin alt u)^2 + v^2), sin alt - cos alt u)``: the same
+    angle without a cancelling ``1 - cang^2``, one division and one root fewer."""
+    f1 = np.float32(1.0)
+    bad = False
+    for j in range(1, o.shape[0] - 1):
+        gx, gy = _gradient(zn, zc, zs, j, cw)
+        x = gx * ex
+        y = gy * ny
+        slope = sq * (x * x + y * y)
+        u = y * cu - x * su
+        v = y * su + x * cu
+        m = ca + sa * u
+        ang = _angle(np.sqrt(m * m + v * v), sa - ca * u)
+        s = f1 - ang * atan_pos(np.sqrt(slope)) * inv_sq_half_pi
+        # NaN where the centre is nodata or the gradient overflowed: the float64 path
+        s = s + (zc[j] - zc[j]) + (slope - slope)
+        bad |= s != s
+        o[j] = _clamp01(s)
+    return bad
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy", fastmath={"contract"})
+def _igor_row(
+    zn: np.ndarray, zc: np.ndarray, zs: np.ndarray, o: np.ndarray, cw: np.float32,
+    ex: np.float32, ny: np.float32, zf32: np.float32, ax: np.float32, ay: np.float32,
+    deg_per_90: np.float32, inv_pi: np.float32,
+) -> bool:  # fmt: skip
+    """Inner cells of one row of ``-igor`` into ``o``; True if one of them is NaN. The
+    difference between the aspect ``atan2(gy, gx)`` and ``1.5 pi - az`` is the angle between
+    the gradient and the unit vector ``(ax, ay)`` there: one arctangent of the cross and dot
+    products (no fold of the angles into [0, pi])."""
+    f1 = np.float32(1.0)
+    bad = False
+    for j in range(1, o.shape[0] - 1):
+        gx, gy = _gradient(zn, zc, zs, j, cw)
+        x = gx * ex
+        y = gy * ny
+        xx = x * x + y * y
+        strength = atan_pos(np.sqrt(xx) * zf32) * deg_per_90
+        diff = _angle(abs(gx * ay - gy * ax), gx * ax + gy * ay)
+        s = f1 - strength * (f1 - diff * inv_pi)
+        # xx is inf or NaN wherever gx or gy is
+        s = s + (zc[j] - zc[j]) + (xx - xx)
+        bad |= s != s
+        o[j] = _clamp01(s)
+    return bad
 
 
 @njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
@@ -297,12 +356,15 @@ def _hillshade_rows(
     sq = np.float32(zf * zf)
     zf32 = np.float32(zf)
     half = np.float32(0.5)
-    # -igor: GDAL's DifferenceBetweenAngles(aspect, 1.5 pi - az); aspect in (-pi, pi]
-    n2 = np.fmod(1.5 * math.pi - az, 2.0 * math.pi)
-    n2 = np.float32(n2 + 2.0 * math.pi if n2 < 0.0 else n2)
-    pi32 = np.float32(math.pi)
+    # -combined: the light's altitude and the gradient's components along and across it
+    ca = np.float32(math.cos(math.radians(altitude)))
+    cu = np.float32(math.cos(az) * zf)
+    su = np.float32(math.sin(az) * zf)
+    # -igor: GDAL's DifferenceBetweenAngles(aspect, 1.5 pi - az), the angle between the
+    # gradient and the unit vector (ax, ay) at 1.5 pi - az
+    ax = np.float32(math.cos(1.5 * math.pi - az))
+    ay = np.float32(math.sin(1.5 * math.pi - az))
     inv_pi = np.float32(1.0 / math.pi)
-    two_pi = np.float32(2.0 * math.pi)
     deg_per_90 = np.float32(180.0 / math.pi / 90.0)
     inv_sq_half_pi = np.float32(_INV_SQUARE_OF_HALF_PI)
     for i in range(i0, i1):
@@ -329,18 +391,7 @@ def _hillshade_rows(
                 bad |= s != s
                 o[j] = _clamp01(s)
         elif variant == 1:  # -combined
-            for j in range(1, w - 1):
-                gx, gy = _gradient(zn, zc, zs, j, cw)
-                x = gx * ex
-                y = gy * ny
-                slope = sq * (x * x + y * y)
-                cang = (sa - (y * cc - x * sc)) / np.sqrt(f1 + slope)
-                c = min(max(cang, np.float32(-1)), f1)
-                ang = _atan2(np.sqrt((f1 - c) * (f1 + c)), c)  # acos(c)
-                s = f1 - ang * atan_pos(np.sqrt(slope)) * inv_sq_half_pi
-                s = s + (cang - cang) + (zc[j] - zc[j]) + (slope - slope)
-                bad |= s != s
-                o[j] = _clamp01(s)
+            bad = _combined_row(zn, zc, zs, o, cw, ex, ny, sq, sa, ca, cu, su, inv_sq_half_pi)
         elif variant == 2:  # -multidirectional (Mark 1992)
             for j in range(1, w - 1):
                 gx, gy = _gradient(zn, zc, zs, j, cw)
@@ -360,20 +411,7 @@ def _hillshade_rows(
                 bad |= s != s
                 o[j] = _clamp01(s)
         else:  # -igor
-            for j in range(1, w - 1):
-                gx, gy = _gradient(zn, zc, zs, j, cw)
-                x = gx * ex
-                y = gy * ny
-                xx = x * x + y * y
-                strength = atan_pos(np.sqrt(xx) * zf32) * deg_per_90
-                aspect = _atan2(gy, gx)
-                n1 = aspect + two_pi if aspect < f0 else aspect
-                diff = abs(n1 - n2)
-                diff = two_pi - diff if diff > pi32 else diff
-                s = f1 - strength * (f1 - diff * inv_pi)
-                s = s + (zc[j] - zc[j]) + (xx - xx) + (gx - gx) + (gy - gy)
-                bad |= s != s
-                o[j] = _clamp01(s)
+            bad = _igor_row(zn, zc, zs, o, cw, ex, ny, zf32, ax, ay, deg_per_90, inv_pi)
         for j in (0, w - 1):
             s = _pixel(z, i, j, inv_ew, inv_ns, z_factor, azimuth, altitude, algorithm, variant)
             o[j] = min(max(s, 0.0), 1.0) if not np.isnan(s) else np.nan
