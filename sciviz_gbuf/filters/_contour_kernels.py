@@ -273,6 +273,25 @@ def ink_order(bits, node, order, tmp, hist):
 
 
 @njit(cache=True, nogil=True, _nrt=False)
+def cut_rows(i0, i1, valid, cut):
+    """Rows ``i0 .. i1`` of :func:`._contour_generalize.cut_cells`: True on the grid's edge
+    and where a cell of the 3 x 3 around is not ``valid``."""
+    h, w = valid.shape
+    for i in range(i0, i1):
+        o = cut[i]
+        if i == 0 or i == h - 1:
+            for j in range(w):
+                o[j] = True
+            continue
+        a, b, c = valid[i - 1], valid[i], valid[i + 1]
+        o[0] = True
+        o[w - 1] = True
+        for j in range(1, w - 1):
+            o[j] = not (a[j - 1] & a[j] & a[j + 1] & b[j - 1] & b[j] & b[j + 1] & c[j - 1]
+                        & c[j] & c[j + 1])  # fmt: skip
+
+
+@njit(cache=True, nogil=True, _nrt=False)
 def ring_opening(ink, node, order, cut, min_ring, min_stub, par, up, at, big, box, touch, level,
                  out):  # fmt: skip
     """The attribute opening of ``ink`` by the size of its 8-connected components: each pixel

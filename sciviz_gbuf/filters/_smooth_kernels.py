@@ -26,6 +26,7 @@ __all__ = ["blend_kernel", "least_gradient", "local_linear_kernel"]
 def local_linear_kernel(
     z: np.ndarray, valid: np.ndarray, g: np.ndarray, gd: np.ndarray, gdd: np.ndarray,
     sigma: float, out: np.ndarray | None = None, work: np.ndarray | None = None,
+    serial: bool = False,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
     """``(a, b, c)`` float64: at each cell the least-squares plane ``a + b dx + c dy`` of the
     valid cells around it, weighted ``g(dx) g(dy)`` (taps ``g``, ``g d``, ``g d^2`` of one
@@ -33,7 +34,7 @@ def local_linear_kernel(
     ``out``: an optional (3, H, W) C-contiguous float64 array to write them into; ``work``:
     an optional flat float64 buffer of at least ``5 H W`` for the x-passes (a caller that
     fits strip after strip reuses its memory: fresh memory costs more to touch than the
-    sums).
+    sums); ``serial``: on the calling thread only (for a caller that runs tiles on threads).
 
     The six moments of the valid mask are the same at every cell whose whole window is valid
     and inside the grid (most of a DEM): there they are computed once, from a row of ones by
@@ -65,15 +66,21 @@ def local_linear_kernel(
     if work is None:
         work = np.empty(5 * h * w, np.float64)
     xs = work[: 5 * h * w].reshape(5, h, w)
-    run_bands(_x_rows, h, zc, vc, g, gd, gdd, xs, full_x[:3, 0], row_ok,
-              scratch=lambda: (np.empty(w), np.empty(w)))  # fmt: skip
+    bands = _serial if serial else run_bands
+    bands(_x_rows, h, zc, vc, g, gd, gdd, xs, full_x[:3, 0], row_ok,
+          scratch=lambda: (np.empty(w), np.empty(w)))  # fmt: skip
     if out is None:
         out = np.empty((3, h, w), np.float64)
     a, b, c = out[0], out[1], out[2]
-    run_bands(_y_rows, h, xs, vc, g, gd, gdd, float(sigma), full_y, a, b, c,
-              scratch=lambda: (np.empty((9, w)), np.empty(w, np.int32),
-                               np.empty(w + 1, np.int32)))  # fmt: skip
+    bands(_y_rows, h, xs, vc, g, gd, gdd, float(sigma), full_y, a, b, c,
+          scratch=lambda: (np.empty((9, w)), np.empty(w, np.int32),
+                           np.empty(w + 1, np.int32)))  # fmt: skip
     return a, b, c
+
+
+def _serial(kernel, n: int, *args: object, scratch=None) -> None:
+    """:func:`.run_bands`' call on the calling thread alone: ``kernel(0, n, *args)``."""
+    kernel(0, n, *args, *(scratch() if scratch is not None else ()))
 
 
 @njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
@@ -199,7 +206,7 @@ def _y_rows(
         run[0] = 0
         for j in range(w):
             run[j + 1] = run[j] + (1 if bad[j] > 0 else 0)
-        for f in range(9):
+        for f in range(6, 9):
             for j in range(w):
                 acc[f, j] = 0.0
         # mz, myz, mxz: four taps a pass where four rows are in the grid (each sum still
@@ -219,7 +226,8 @@ def _y_rows(
                 _taps2(acc[6], acc[7], xs[3, row], g[t], gd[t])
                 _taps1(acc[8], xs[4, row], g[t])
                 t += 1
-        # the mask moments: constants where the window is full, summed over runs elsewhere
+        # the mask moments: constants where the window is full, summed over runs elsewhere;
+        # a full window's system is the same at every cell, so its cofactors are taken once
         j = 0
         while j < w:
             jl = max(j - r, 0)
@@ -233,29 +241,59 @@ def _y_rows(
                     break
                 k += 1
             if full_here:
+                _solve_full(acc[6, j:k], acc[7, j:k], acc[8, j:k], full, s4, a[i, j:k],
+                            b[i, j:k], c[i, j:k])  # fmt: skip
+            else:
                 for f in range(6):
                     for q in range(j, k):
-                        acc[f, q] = full[f]
-            else:
+                        acc[f, q] = 0.0
                 _v_taps(acc[:, j:k], xs[:, :, j:k], i, g, gd, gdd)
+                _solve(acc[:, j:k], s4, a[i, j:k], b[i, j:k], c[i, j:k])
             j = k
-        for j in range(w):
-            m0, my, myy, mx, mxy = acc[0, j], acc[1, j], acc[2, j], acc[3, j], acc[4, j]
-            mxx, mz, myz, mxz = acc[5, j], acc[6, j], acc[7, j], acc[8, j]
-            # [[m0 mx my] [mx mxx mxy] [my mxy myy]] (a b c) = (mz mxz myz), Cramer's rule
-            c00 = mxx * myy - mxy * mxy
-            c01 = mxy * my - mx * myy
-            c02 = mx * mxy - mxx * my
-            det = m0 * c00 + mx * c01 + my * c02
-            c11 = m0 * myy - my * my
-            c12 = mx * my - m0 * mxy
-            c22 = m0 * mxx - mx * mx
-            # a plane needs a spread of cells: det relative to m0^3 sigma^4 (~1 when full)
-            ok = det > s4 * m0 * m0 * m0
-            inv = 1.0 / det if ok else 0.0
-            a[i, j] = (c00 * mz + c01 * mxz + c02 * myz) * inv if ok else mz / m0
-            b[i, j] = (c01 * mz + c11 * mxz + c12 * myz) * inv
-            c[i, j] = (c02 * mz + c12 * mxz + c22 * myz) * inv
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _solve(acc: np.ndarray, s4: float, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> None:
+    """The plane ``(a, b, c)`` of each cell from its nine moments ``acc``: the 3 x 3 system
+    ``[[m0 mx my] [mx mxx mxy] [my mxy myy]] (a b c) = (mz mxz myz)`` by Cramer's rule; where
+    the cells span no plane (``det <= s4 m0^3``, ``s4 = 1e-3 sigma^4``: det relative to
+    ``m0^3 sigma^4``, ~1 when full) the weighted mean and no slope."""
+    for j in range(a.shape[0]):
+        m0, my, myy, mx, mxy = acc[0, j], acc[1, j], acc[2, j], acc[3, j], acc[4, j]
+        mxx, mz, myz, mxz = acc[5, j], acc[6, j], acc[7, j], acc[8, j]
+        c00 = mxx * myy - mxy * mxy
+        c01 = mxy * my - mx * myy
+        c02 = mx * mxy - mxx * my
+        det = m0 * c00 + mx * c01 + my * c02
+        c11 = m0 * myy - my * my
+        c12 = mx * my - m0 * mxy
+        c22 = m0 * mxx - mx * mx
+        ok = det > s4 * m0 * m0 * m0
+        inv = 1.0 / det if ok else 0.0
+        a[j] = (c00 * mz + c01 * mxz + c02 * myz) * inv if ok else mz / m0
+        b[j] = (c01 * mz + c11 * mxz + c12 * myz) * inv
+        c[j] = (c02 * mz + c12 * mxz + c22 * myz) * inv
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _solve_full(mz: np.ndarray, myz: np.ndarray, mxz: np.ndarray, full: np.ndarray, s4: float,
+                a: np.ndarray, b: np.ndarray, c: np.ndarray) -> None:  # fmt: skip
+    """:func:`_solve` where every cell has the mask moments ``full`` (the same operations on
+    the same values: the same bits), the cofactors taken once."""
+    m0, my, myy, mx, mxy, mxx = full[0], full[1], full[2], full[3], full[4], full[5]
+    c00 = mxx * myy - mxy * mxy
+    c01 = mxy * my - mx * myy
+    c02 = mx * mxy - mxx * my
+    det = m0 * c00 + mx * c01 + my * c02
+    c11 = m0 * myy - my * my
+    c12 = mx * my - m0 * mxy
+    c22 = m0 * mxx - mx * mx
+    ok = det > s4 * m0 * m0 * m0
+    inv = 1.0 / det if ok else 0.0
+    for j in range(a.shape[0]):
+        a[j] = (c00 * mz[j] + c01 * mxz[j] + c02 * myz[j]) * inv if ok else mz[j] / m0
+        b[j] = (c01 * mz[j] + c11 * mxz[j] + c12 * myz[j]) * inv
+        c[j] = (c02 * mz[j] + c12 * mxz[j] + c22 * myz[j]) * inv
 
 
 # ------------------------------------------------ the blend of the fits, the band, the flats
@@ -293,7 +331,7 @@ def _blend_rows(
                 continue
             zc = z[i, j]
             # the width asked by the line spacing interval / g of the SIGMA_SLOPE (= 1) fit
-            g = np.hypot(fits[1, i, j], fits[2, i, j])
+            g = np.sqrt(fits[1, i, j] * fits[1, i, j] + fits[2, i, j] * fits[2, i, j])
             spacing = interval / g if g > 0.0 else np.inf
             sigma = min(max(per_px * (spacing - steep), 0.0), sigma_max)
             sg = max(sigma, sigma_grad)
@@ -325,12 +363,12 @@ def _blend_rows(
                     zmin = min(zmin, zn)
             v = min(max(v, lo), hi)
             out[i, j] = np.float32(v)
-            grad[i, j] = np.float32(0.0) if zmax == zmin else np.float32(np.hypot(gx, gy))
+            grad[i, j] = np.float32(0.0) if zmax == zmin else np.float32(np.sqrt(gx * gx + gy * gy))
 
 
 def blend_kernel(
     z: np.ndarray, valid: np.ndarray, fits: np.ndarray, interval: float, *, per_px: float,
-    steep: float, sigma_max: float, sigma_grad: float, displace: float,
+    steep: float, sigma_max: float, sigma_grad: float, displace: float, serial: bool = False,
 ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """The generalised field and its gradient magnitude from the fits (float32, NaN where
     not ``valid``): what ``_contour_generalize.smooth_strip_reference`` computes with some
@@ -347,20 +385,22 @@ def blend_kernel(
     vc = np.ascontiguousarray(valid, dtype=np.bool_)
     out = np.empty((h, w), np.float32)
     grad = np.empty((h, w), np.float32)
-    run_bands(_blend_rows, h, zc, vc, np.ascontiguousarray(fits), float(interval),
-              float(per_px), float(steep), float(sigma_max), float(sigma_grad),
-              float(displace), float(displace / np.sqrt(2.0)), out, grad)  # fmt: skip
+    bands = _serial if serial else run_bands
+    bands(_blend_rows, h, zc, vc, np.ascontiguousarray(fits), float(interval), float(per_px),
+          float(steep), float(sigma_max), float(sigma_grad), float(displace),
+          float(displace / np.sqrt(2.0)), out, grad)  # fmt: skip
     return out, grad
 
 
 @njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
 def least_gradient(b: np.ndarray, c: np.ndarray, valid: np.ndarray) -> float:
-    """The least ``hypot(b, c)`` over the ``valid`` cells (inf if none): one pass, no
-    temporaries (the smoothing asks it of every strip's slope fit)."""
+    """The least ``sqrt(b^2 + c^2)`` over the ``valid`` cells (inf if none): one pass, no
+    temporaries (the smoothing asks it of every strip's slope fit); the root of the least
+    square, the same value."""
     h, w = b.shape
     best = np.inf
     for i in range(h):
         for j in range(w):
-            if valid[i, j]:
-                best = min(best, np.hypot(b[i, j], c[i, j]))
-    return best
+            q = b[i, j] * b[i, j] + c[i, j] * c[i, j]
+            best = q if valid[i, j] and q < best else best
+    return np.sqrt(best)

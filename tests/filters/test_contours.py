@@ -656,3 +656,35 @@ def test_smooth_strip_kernel_on_odd_grids(z, data):
     for fast, slow in zip(G.smooth_strip(z, valid, 1.0), G.smooth_strip_reference(z, valid, 1.0),
                           strict=True):  # fmt: skip
         np.testing.assert_array_equal(fast, slow)
+
+
+# -------------------------------------------- tiles of the smoothing and the cut cells' kernel
+def test_smooth_field_by_tiles_equals_one_piece(monkeypatch):
+    """The whole field smoothed tile by tile on two threads (tiles of 32 x 48 cells read with
+    the smoothing's reach around them) equals one piece bit for bit: nodata near tile
+    corners, a lake across tiles, flat ground and the grid's edges."""
+    from sciviz_gbuf.filters import _contour_generalize as G
+
+    rng = np.random.default_rng(11)
+    z = (np.cumsum(np.cumsum(rng.standard_normal((150, 173)), 0), 1) * 2 + 900).astype(np.float32)
+    valid = rng.random(z.shape) > 0.02
+    valid[60:90, 40:110] = False
+    z[100:120, :] = 900.0
+    z[~valid] = np.nan
+    whole = G.smooth_strip(z, valid, 5.0)
+    monkeypatch.setattr(G, "STRIP_ROWS", 32)
+    monkeypatch.setattr(G, "TILE_COLS", 48)
+    tiled = G.smooth_field(z, valid, 5.0)
+    for a, b in zip(tiled, whole, strict=True):
+        np.testing.assert_array_equal(a, b)
+    assert np.nanstd(whole[0] - z) > 0.1  # the smoothing did move heights
+
+
+@settings(max_examples=60, deadline=None)
+@given(hnp.arrays(np.bool_, st.tuples(st.integers(1, 9), st.integers(1, 11))))
+def test_cut_cells_is_the_dilated_nodata_and_the_edge(valid):
+    from sciviz_gbuf.filters import _contour_generalize as G
+
+    expected = ndimage.binary_dilation(~valid, structure=np.ones((3, 3), bool))
+    expected[0, :] = expected[-1, :] = expected[:, 0] = expected[:, -1] = True
+    np.testing.assert_array_equal(G.cut_cells(valid), expected)
