@@ -138,6 +138,8 @@ def local_linear_reference(z: np.ndarray, valid: np.ndarray, sigma: float):
 #: ``2 SMOOTH_RADIUS + 1`` rows of the x-passes, 0.4 MB that stay in a core's cache.
 STRIP_ROWS = 256
 TILE_COLS = 512
+#: Columns of a tile of the ring opening (its rows: ``STRIP_ROWS``).
+RING_TILE_COLS = 256
 
 
 def smooth_field(
@@ -308,28 +310,33 @@ def drop_small_rings(
     (crowded minors, a level grazing flat ground) keeps the ink it has along its whole length
     instead of breaking into short dark dashes at any visible threshold.
 
-    Row strips of ``STRIP_ROWS`` rows are read with ``ceil(min_ring) + 1`` rows around them
-    (a small component lies within ``min_ring`` cells of each of its pixels): the same pixels
-    as in one piece, memory for a strip."""
+    Tiles of ``STRIP_ROWS`` x ``RING_TILE_COLS`` cells are read with ``ceil(min_ring) + 1``
+    cells around them (a small component lies within ``min_ring`` cells of each of its
+    pixels, and one cut by the tile's side is wider than that there): the same pixels as in
+    one piece, memory for a tile (the union-find's lookups then stay in a core's cache)."""
     if min_ring <= 0:
         return ink
     ink = np.ascontiguousarray(ink, np.float32)
     cut = cut_cells(valid)
-    h = ink.shape[0]
+    h, w = ink.shape
     margin = math.ceil(min_ring) + 1
-    if h <= STRIP_ROWS + 2 * margin:
+    if h <= STRIP_ROWS + 2 * margin and w <= RING_TILE_COLS + 2 * margin:
         return ring_opening(ink, cut, min_ring, min_stub)
     out = np.empty_like(ink)
+    tiles = [(a, c) for a in range(0, h, STRIP_ROWS) for c in range(0, w, RING_TILE_COLS)]
+    following = itertools.count()  # next() is atomic: each tile is taken once
 
-    def strips(k0: int, k1: int) -> None:
-        for a in range(k0 * STRIP_ROWS, min(k1 * STRIP_ROWS, h), STRIP_ROWS):
-            b = min(a + STRIP_ROWS, h)
+    def open_tiles(_k0: int, _k1: int) -> None:
+        while (k := next(following)) < len(tiles):
+            a, c = tiles[k]
+            b, d = min(a + STRIP_ROWS, h), min(c + RING_TILE_COLS, w)
             lo, hi = max(0, a - margin), min(h, b + margin)
-            part = ring_opening(ink[lo:hi], cut[lo:hi], min_ring, min_stub)
-            out[a:b] = part[a - lo : b - lo]
+            cl, ch = max(0, c - margin), min(w, d + margin)
+            part = ring_opening(ink[lo:hi, cl:ch], cut[lo:hi, cl:ch], min_ring, min_stub)
+            out[a:b, c:d] = part[a - lo : b - lo, c - cl : d - cl]
 
-    # strips at once on every core (the kernel releases the GIL; each writes its own rows)
-    run_bands(strips, -(-h // STRIP_ROWS), min_items=1)
+    # one band per core, each taking the next tile (the kernels release the GIL)
+    run_bands(open_tiles, threads(), min_items=1)
     return out
 
 

@@ -101,10 +101,15 @@ def test_majors_are_untouched_and_lines_keep_their_ink():
     assert ink.sum() > 0.9 * raw.sum()
 
 
-def test_strips_give_the_same_pixels(monkeypatch):
+@pytest.mark.parametrize("tile_cols", [10**6, 13])
+def test_strips_and_tiles_give_the_same_pixels(monkeypatch, tile_cols):
+    """The smoothing and the ring opening by strips of 9 rows, or tiles of 9 x 13 cells
+    (read with their reach around them), draw the pixels of one piece."""
     z = crowded_minors(seed=3)
     whole = contour_lines(z, **OPTIONS, generalize=True)
     monkeypatch.setattr(_contour_generalize, "STRIP_ROWS", 9)
+    monkeypatch.setattr(_contour_generalize, "TILE_COLS", tile_cols)
+    monkeypatch.setattr(_contour_generalize, "RING_TILE_COLS", tile_cols)
     assert np.array_equal(contour_lines(z, **OPTIONS, generalize=True), whole)
 
 
