@@ -166,10 +166,10 @@ def smooth_field(
             b, d = min(a + STRIP_ROWS, h), min(c + TILE_COLS, w)
             lo, hi = max(0, a - r), min(h, b + r)
             cl, ch = max(0, c - r), min(w, d + r)
-            zs, gs = smooth_strip(z[lo:hi, cl:ch], valid[lo:hi, cl:ch], interval, work=work,
-                                  serial=True)  # fmt: skip
-            out[a:b, c:d] = zs[a - lo : b - lo, c - cl : d - cl]
-            grad[a:b, c:d] = gs[a - lo : b - lo, c - cl : d - cl]
+            inner = (a - lo, b - lo, c - cl, d - cl)
+            into = (out[a:b, c:d], grad[a:b, c:d])
+            smooth_strip(z[lo:hi, cl:ch], valid[lo:hi, cl:ch], interval, work=work,
+                         serial=True, inner=inner, into=into)  # fmt: skip
 
     # one band per core, each taking the next tile (the kernels release the GIL)
     run_bands(smooth_tiles, threads(), min_items=1)
@@ -178,7 +178,8 @@ def smooth_field(
 
 def smooth_strip(
     z: np.ndarray, valid: np.ndarray, interval: float, work: np.ndarray | None = None,
-    serial: bool = False,
+    serial: bool = False, inner: tuple[int, int, int, int] | None = None,
+    into: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """The field smoothed as the local line spacing ``interval / g`` asks (module docstring)
     and its gradient magnitude (per cell), both float32 and NaN where not ``valid``.
@@ -192,26 +193,33 @@ def smooth_strip(
     one pass per cell (:func:`._smooth_kernels.blend_kernel`); the same values as
     :func:`smooth_strip_reference`, the array statement (tested bit for bit). ``work``: an
     optional flat float64 buffer of at least ``14 H W`` to compute in; ``serial``: on the
-    calling thread only."""
+    calling thread only; ``inner``: with ``serial``, only the cells ``(r0, r1, c0, c1)``
+    (rows, columns; the others are read), written into the arrays ``into`` if given."""
     z64 = np.ascontiguousarray(z, dtype=np.float64)
     n = z.size
     nfit = 3 * (len(SIGMAS) - 1)
     if work is None:
         work = np.empty((nfit + 5) * n, np.float64)
     fits = work[: nfit * n].reshape(nfit, *z.shape)
+    h, w = z.shape
+    r0, r1, c0, c1 = (0, h, 0, w) if inner is None else inner
+    rows = (r0, r1) if serial and inner is not None else None
     widest = SIGMA_MAX
     for k, s in enumerate(SIGMAS[1:]):
         if s > SIGMA_SLOPE and SIGMAS[k] >= widest:
             break  # no cell of the strip asks for this width (its fit would not be read)
         g, gd, gdd = _kernels(s)
         _sk.local_linear_kernel(z64, valid, g, gd, gdd, s, out=fits[3 * k : 3 * k + 3],
-                                work=work[nfit * n :], serial=serial)  # fmt: skip
+                                work=work[nfit * n :], serial=serial, rows=rows)  # fmt: skip
         if s == SIGMA_SLOPE:
-            widest = _widest_sigma(fits[3 * k + 1], fits[3 * k + 2], valid, interval)
+            widest = _widest_sigma(fits[3 * k + 1, r0:r1, c0:c1], fits[3 * k + 2, r0:r1, c0:c1],
+                                   valid[r0:r1, c0:c1], interval)  # fmt: skip
     # the kernel blends the fits at the widths of SIGMAS = (0, 1, 2, 4), SIGMA_SLOPE = 1
+    out, grad = (None, None) if into is None else into
     return _sk.blend_kernel(
         z64, valid, fits, interval, per_px=SIGMA_PER_PX, steep=STEEP_SPACING,
         sigma_max=SIGMA_MAX, sigma_grad=SIGMA_GRADIENT, displace=DISPLACE_MAX, serial=serial,
+        inner=(r0, r1, c0, c1), out=out, grad=grad,
     )  # fmt: skip
 
 

@@ -26,7 +26,7 @@ __all__ = ["blend_kernel", "least_gradient", "local_linear_kernel"]
 def local_linear_kernel(
     z: np.ndarray, valid: np.ndarray, g: np.ndarray, gd: np.ndarray, gdd: np.ndarray,
     sigma: float, out: np.ndarray | None = None, work: np.ndarray | None = None,
-    serial: bool = False,
+    serial: bool = False, rows: tuple[int, int] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
     """``(a, b, c)`` float64: at each cell the least-squares plane ``a + b dx + c dy`` of the
     valid cells around it, weighted ``g(dx) g(dy)`` (taps ``g``, ``g d``, ``g d^2`` of one
@@ -34,7 +34,9 @@ def local_linear_kernel(
     ``out``: an optional (3, H, W) C-contiguous float64 array to write them into; ``work``:
     an optional flat float64 buffer of at least ``5 H W`` for the x-passes (a caller that
     fits strip after strip reuses its memory: fresh memory costs more to touch than the
-    sums); ``serial``: on the calling thread only (for a caller that runs tiles on threads).
+    sums); ``serial``: on the calling thread only (for a caller that runs tiles on threads);
+    ``rows``: with ``serial``, the rows ``(r0, r1)`` to fit (the others are read, not fitted:
+    ``a``, ``b``, ``c`` hold no values there).
 
     The six moments of the valid mask are the same at every cell whose whole window is valid
     and inside the grid (most of a DEM): there they are computed once, from a row of ones by
@@ -72,9 +74,13 @@ def local_linear_kernel(
     if out is None:
         out = np.empty((3, h, w), np.float64)
     a, b, c = out[0], out[1], out[2]
-    bands(_y_rows, h, xs, vc, g, gd, gdd, float(sigma), full_y, a, b, c,
-          scratch=lambda: (np.empty((9, w)), np.empty(w, np.int32),
-                           np.empty(w + 1, np.int32)))  # fmt: skip
+    y_args = (xs, vc, g, gd, gdd, float(sigma), full_y, a, b, c)
+    if rows is not None and serial:
+        _y_rows(rows[0], rows[1], *y_args, np.empty((9, w)), np.empty(w, np.int32),
+                np.empty(w + 1, np.int32))  # fmt: skip
+    else:
+        bands(_y_rows, h, *y_args, scratch=lambda: (np.empty((9, w)), np.empty(w, np.int32),
+                                                    np.empty(w + 1, np.int32)))  # fmt: skip
     return a, b, c
 
 
@@ -318,16 +324,17 @@ def _lerp_fit(s: float, f0: float, f1: float, f2: float, f3: float) -> float:
 def _blend_rows(
     i0: int, i1: int, z: np.ndarray, valid: np.ndarray, fits: np.ndarray, interval: float,
     per_px: float, steep: float, sigma_max: float, sigma_grad: float, k_axis: float,
-    k_diag: float, out: np.ndarray, grad: np.ndarray,
+    k_diag: float, r0: int, c0: int, c1: int, out: np.ndarray, grad: np.ndarray,
 ) -> None:  # fmt: skip
-    """Rows ``i0 .. i1`` of :func:`blend_kernel`."""
+    """Rows ``r0 + i0 .. r0 + i1``, columns ``c0 .. c1`` of :func:`blend_kernel`, cell
+    ``(i, j)`` into ``out[i - r0, j - c0]`` and ``grad[i - r0, j - c0]``."""
     h, w = z.shape
     nan = np.float32(np.nan)
-    for i in range(i0, i1):
-        for j in range(w):
+    for i in range(r0 + i0, r0 + i1):
+        for j in range(c0, c1):
             if not valid[i, j]:
-                out[i, j] = nan
-                grad[i, j] = nan
+                out[i - r0, j - c0] = nan
+                grad[i - r0, j - c0] = nan
                 continue
             zc = z[i, j]
             # the width asked by the line spacing interval / g of the SIGMA_SLOPE (= 1) fit
@@ -362,13 +369,17 @@ def _blend_rows(
                     zmax = max(zmax, zn)
                     zmin = min(zmin, zn)
             v = min(max(v, lo), hi)
-            out[i, j] = np.float32(v)
-            grad[i, j] = np.float32(0.0) if zmax == zmin else np.float32(np.sqrt(gx * gx + gy * gy))
+            out[i - r0, j - c0] = np.float32(v)
+            grad[i - r0, j - c0] = (
+                np.float32(0.0) if zmax == zmin else np.float32(np.sqrt(gx * gx + gy * gy))
+            )
 
 
 def blend_kernel(
     z: np.ndarray, valid: np.ndarray, fits: np.ndarray, interval: float, *, per_px: float,
     steep: float, sigma_max: float, sigma_grad: float, displace: float, serial: bool = False,
+    inner: tuple[int, int, int, int] | None = None, out: np.ndarray | None = None,
+    grad: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """The generalised field and its gradient magnitude from the fits (float32, NaN where
     not ``valid``): what ``_contour_generalize.smooth_strip_reference`` computes with some
@@ -379,16 +390,21 @@ def blend_kernel(
     fit's gradient ``g``; the value blended between the fits around that width (the height
     itself at width 0), the gradient between those around ``max(width, sigma_grad)``; the
     value clipped to the tolerance band (the range of the bilinear interpolant within
-    ``displace`` cells); the gradient 0 where the 3 x 3 valid heights are all equal."""
+    ``displace`` cells); the gradient 0 where the 3 x 3 valid heights are all equal.
+    ``inner``: only the cells ``(r0, r1, c0, c1)`` (rows, columns), into ``out`` and ``grad``
+    of that shape when given (views of a larger output)."""
     h, w = z.shape
+    r0, r1, c0, c1 = (0, h, 0, w) if inner is None else inner
     zc = np.ascontiguousarray(z, dtype=np.float64)
     vc = np.ascontiguousarray(valid, dtype=np.bool_)
-    out = np.empty((h, w), np.float32)
-    grad = np.empty((h, w), np.float32)
+    if out is None:
+        out = np.empty((r1 - r0, c1 - c0), np.float32)
+    if grad is None:
+        grad = np.empty((r1 - r0, c1 - c0), np.float32)
     bands = _serial if serial else run_bands
-    bands(_blend_rows, h, zc, vc, np.ascontiguousarray(fits), float(interval), float(per_px),
-          float(steep), float(sigma_max), float(sigma_grad), float(displace),
-          float(displace / np.sqrt(2.0)), out, grad)  # fmt: skip
+    bands(_blend_rows, r1 - r0, zc, vc, np.ascontiguousarray(fits), float(interval),
+          float(per_px), float(steep), float(sigma_max), float(sigma_grad), float(displace),
+          float(displace / np.sqrt(2.0)), r0, c0, c1, out, grad)  # fmt: skip
     return out, grad
 
 
