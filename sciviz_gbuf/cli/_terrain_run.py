@@ -17,7 +17,7 @@ from ..errors import InputError
 from ..readers import read_dem
 from ..recipes.labels import contour_labels, label_options, labels_to_geojson
 from ..recipes.layout import write_map_page
-from ..recipes.terrain import topographic_map
+from ..recipes.terrain import topographic_map, write_topographic_png
 from ..recipes.tiles import write_map_tiles
 from ..writers.cog import (
     check_chunk_memory,
@@ -233,6 +233,17 @@ def _topo_in_memory(
     with progress(show, 2 + (args.geotiff is not None), "topo") as bar:
         dem = _read_terrain(source, args.geographic)
         bar.step("map")
+        if not tif and args.geotiff is None and not args.labels:
+            # mapped and written block by block (the same pixels, mapping and deflating at once)
+            opts = _topo_options(args, show)
+            for key in ("progress_bar", "dpi"):
+                opts.pop(key, None)
+            h, w = write_topographic_png(out, dem, **opts, dpi=args.dpi)
+            bar.step("write")
+            if args.labels_geojson is not None:
+                _write_labels_geojson(args, dem)
+            print(f"wrote {out}{_also(args)} ({w}x{h}) in {time.perf_counter() - t0:.1f} s")
+            return 0
         rgba = topographic_map(dem, **_topo_options(args, show))
         bar.step("write")
         if tif:
@@ -248,9 +259,13 @@ def _topo_in_memory(
         if args.labels_geojson is not None:
             _write_labels_geojson(args, dem)
     h, w = rgba.shape[:2]
-    extra = "".join(f" and {f}" for f in (args.geotiff, args.overview, args.labels_geojson) if f)
-    print(f"wrote {out}{extra} ({w}x{h}) in {time.perf_counter() - t0:.1f} s")
+    print(f"wrote {out}{_also(args)} ({w}x{h}) in {time.perf_counter() - t0:.1f} s")
     return 0
+
+
+def _also(args: argparse.Namespace) -> str:
+    """`` and F`` for each other file a topo run wrote."""
+    return "".join(f" and {f}" for f in (args.geotiff, args.overview, args.labels_geojson) if f)
 
 
 def _write_labels_geojson(args: argparse.Namespace, dem) -> None:

@@ -27,16 +27,18 @@ from __future__ import annotations
 
 import os
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
+from contextlib import contextmanager
 
-__all__ = ["band_edges", "run_bands", "threads"]
+__all__ = ["band_edges", "on_this_thread", "run_bands", "threads"]
 
 #: Fewer items than this per band are not worth a thread's wake-up (~20 us): small images
 #: (a live overlay's thumbnails, the tests' 48 x 36 captures) run in the calling thread.
 MIN_ITEMS_PER_BAND = 8
 
 _lock = threading.Lock()
+_local = threading.local()  # .serial: run_bands runs every band on this thread
 _pool: ThreadPoolExecutor | None = None
 _pool_pid = -1
 _threads = 0
@@ -71,6 +73,20 @@ def _executor() -> ThreadPoolExecutor:
             )
             _pool_pid = os.getpid()
         return _pool
+
+
+@contextmanager
+def on_this_thread() -> Iterator[None]:
+    """Within the block, :func:`run_bands` called on this thread runs the whole loop here, as
+    one band: for a caller that already gives each core a piece of work of its own (blocks of
+    a map computed at once on threads), whose kernels would otherwise wait for the one
+    shared pool (and, from a pool thread, for themselves)."""
+    before = getattr(_local, "serial", False)
+    _local.serial = True
+    try:
+        yield
+    finally:
+        _local.serial = before
 
 
 def band_edges(n: int, parts: int) -> list[int]:
@@ -121,7 +137,7 @@ def run_bands(
     def band_args() -> tuple[object, ...]:
         return args if scratch is None else (*args, *scratch())
 
-    if parts == 1:
+    if parts == 1 or getattr(_local, "serial", False):
         kernel(0, n, *band_args())
         return
     edges = band_edges(n, parts)

@@ -12,29 +12,43 @@ Bird's-eye maps (Fig. 12) and the sumi-e (Fig. 13) are in :mod:`.birdseye`.
 
 from __future__ import annotations
 
+import itertools
 import os
-from collections.abc import Sequence
+from collections import deque
+from collections.abc import Callable, Iterable, Iterator, Sequence
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
 from .. import _dask, _validate
 from .._progress import progress
+from ..core.bands import on_this_thread, threads
 from ..errors import InputError
+from ..filters import hillshade
 from ..readers import DEM
-from ._intervals import contour_intervals, nice_intervals, typical_slope
+from ..writers.png import LARGE_IMAGE, encode_png_rows, write_png, write_png_blocks
+from ._intervals import (
+    contour_intervals,
+    median_ground_slope,
+    nice_intervals,
+    slope_lattice,
+    typical_slope,
+)
 from ._map import (
     CONTOUR_COLOR,
     as_dem,
     check_line_sizes,
     check_z_factor,
     composite,
+    map_band_tables,
     map_layers,
     map_min_ring,
+    relief_z_factor,
 )
-from ._relief import RELIEFS, relief_style
+from ._relief import RELIEFS, relief_flat, relief_reach, relief_style
 from ._resample import check_size_options, map_grid, resample_heights
 from .labels import check_in_memory, draw_labels, label_boxes, label_options, labels_of_grid
-from .terrain_chunked import lazy_topographic_map
+from .terrain_chunked import RELIEF_HALO, lazy_topographic_map, window_map
 
 __all__ = [
     "CONTOUR_COLOR",
@@ -49,7 +63,12 @@ __all__ = [
     "resample_heights",
     "topographic_map",
     "typical_slope",
+    "write_topographic_png",
 ]
+
+#: Rows of a block of a map written as it is made (:func:`write_topographic_png`), at least:
+#: blocks are at least eight halos tall, so the rows read twice stay under a quarter.
+STREAM_ROWS = 256
 
 
 def topographic_map(
@@ -202,43 +221,18 @@ def topographic_map(
     """
     colour = _validate.rgb(contour_color, "contour_color")
     # before the DEM is read
-    check_line_sizes(width=width, major_width=major_width, dense_spacing=dense_spacing)
-    check_size_options(size, scale, dpi)
-    z_factor = check_z_factor(z_factor)
+    z_factor = _check_map_args(width, major_width, dense_spacing, size, scale, dpi, z_factor)
     labels = _validate.boolean(labels, "labels")
     relief_style(relief)
     font_px, spacing_px = label_options(label_size, label_spacing, dpi if scale else None)
     text_colour = colour if label_color is None else _validate.rgb(label_color, "label_color")
-    d = as_dem(dem)
-    if labels:
-        check_in_memory(d)
-    if not _dask.is_dask(d.mask) and not d.mask.any():
-        # A fully transparent picture would look like success.
-        raise InputError(f"{d.source or 'heights'}: every cell is nodata: nothing to map")
-    # Another size: the heights on the output grid first, then the map as always.
-    d = map_grid(d, size=size, scale=scale, dpi=dpi)
-    # The map's options, the same for the in-memory and the chunked map.
-    options = {
-        "interval": interval,
-        "major_interval": major_interval,
-        "contours": contours,
-        "width": width,
-        "major_width": major_width,
-        "dense_spacing": dense_spacing,
-        "generalize": _validate.boolean(generalize, "generalize"),
-        "bands": bands,
-        "cmap": cmap,
-        "sea_level": sea_level,
-        "vmin": vmin,
-        "vmax": vmax,
-        "relief": relief,
-        "azimuth": azimuth,
-        "altitude": altitude,
-        "z_factor": z_factor,
-        "variant": variant,
-        "shadows": shadows,
-        "sky_view": sky_view,
-    }
+    d, options = _map_dem(
+        dem, interval=interval, major_interval=major_interval, contours=contours, width=width,
+        major_width=major_width, dense_spacing=dense_spacing, generalize=generalize,
+        bands=bands, cmap=cmap, sea_level=sea_level, vmin=vmin, vmax=vmax, relief=relief,
+        azimuth=azimuth, altitude=altitude, z_factor=z_factor, variant=variant,
+        shadows=shadows, sky_view=sky_view, size=size, scale=scale, dpi=dpi, in_memory=labels,
+    )  # fmt: skip
     if _dask.is_dask(d.heights):
         return lazy_topographic_map(d, colour, **options)
     with progress(progress_bar, 4, "topographic map") as bar:
@@ -257,3 +251,187 @@ def topographic_map(
             out = draw_labels(out, placed, font_px, text_colour)
         bar.step("done")
     return out
+
+
+def _check_map_args(width, major_width, dense_spacing, size, scale, dpi, z_factor):
+    """The checks of a map's sizes before its DEM is read; returns the checked ``z_factor``."""
+    check_line_sizes(width=width, major_width=major_width, dense_spacing=dense_spacing)
+    check_size_options(size, scale, dpi)
+    return check_z_factor(z_factor)
+
+
+def _map_dem(
+    dem, *, size, scale, dpi, generalize, in_memory: bool = False, **rest
+) -> tuple[DEM, dict]:
+    """``(dem, options of map_layers)`` of :func:`topographic_map`'s arguments (checked by
+    :func:`_check_map_args`): the DEM read and on the map's grid (resampled for another
+    ``size``/``scale``). ``in_memory``: refuse chunked heights."""
+    d = as_dem(dem)
+    if in_memory:
+        check_in_memory(d)
+    if not _dask.is_dask(d.mask) and not d.mask.any():
+        # A fully transparent picture would look like success.
+        raise InputError(f"{d.source or 'heights'}: every cell is nodata: nothing to map")
+    # Another size: the heights on the output grid first, then the map as always.
+    d = map_grid(d, size=size, scale=scale, dpi=dpi)
+    # The map's options, the same for the in-memory and the chunked map.
+    return d, {**rest, "generalize": _validate.boolean(generalize, "generalize")}
+
+
+def write_topographic_png(
+    path: str | os.PathLike,
+    dem: DEM | str | os.PathLike | np.ndarray,
+    *,
+    interval: float | None = None,
+    major_interval: float | None = None,
+    contours: bool = True,
+    width: float = 1.0,
+    major_width: float = 2.0,
+    dense_spacing: float = 4.0,
+    generalize: bool = True,
+    contour_color: Sequence[float] = CONTOUR_COLOR,
+    bands: bool | str | float | Sequence[float] = True,
+    cmap: str | object | None = None,
+    sea_level: float | None = None,
+    vmin: float | None = None,
+    vmax: float | None = None,
+    relief: bool = True,
+    azimuth: float = 315.0,
+    altitude: float = 45.0,
+    z_factor: float | None = None,
+    variant: str = "regular",
+    shadows: bool = False,
+    sky_view: bool = False,
+    size: int | Sequence[int] | None = None,
+    scale: float | str | None = None,
+    dpi: float | None = None,
+) -> tuple[int, int]:
+    """Write :func:`topographic_map` of a DEM as a PNG, block of rows by block of rows as
+    they are mapped: the same pixels, the whole map never in memory.
+
+    The in-memory map makes each layer of the whole grid (relief, contour ink, band
+    heights) and then the RGBA image, one after the other, and only then deflates it. Here
+    what needs the whole grid comes first, as the in-memory map computes it (the height
+    range, the contour intervals, the relief's automatic z factor); then the map is cut into
+    blocks of at least ``STREAM_ROWS`` rows, and on every core a block is read from the
+    heights with the halo its layers need, mapped by the function the chunked map computes a
+    chunk with (:func:`~.terrain_chunked.window_map`: each layer's cells see the neighbourhood
+    they see in memory, so the pixels are the same) and its rows deflated at once
+    (:func:`~sciviz_gbuf.writers.png.encode_png_rows`); the file takes the blocks in order.
+    So mapping and deflating overlap, no array of the grid's size is made after the heights,
+    and memory holds the heights and a few blocks.
+
+    Maps below ``LARGE_IMAGE`` pixels, and those that need the whole grid at once (cast
+    ``shadows``, texture and local-relief styles, labels) or are read in chunks, are made by
+    :func:`topographic_map` and written by :func:`~sciviz_gbuf.writers.png.write_png`.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The PNG to write (atomically: a failure leaves no file).
+    dem, interval, major_interval, contours, width, major_width, dense_spacing, generalize,
+    contour_color, bands, cmap, sea_level, vmin, vmax, relief, azimuth, altitude, z_factor,
+    variant, shadows, sky_view, size, scale, dpi
+        As :func:`topographic_map`; ``dpi`` is recorded in the PNG (and with ``scale``
+        sizes the map, as there).
+
+    Returns
+    -------
+    (int, int)
+        The map's height and width in pixels.
+
+    Raises
+    ------
+    InputError
+        As :func:`topographic_map`, or a path :func:`~sciviz_gbuf.writers.png.write_png`
+        refuses.
+    OutputError
+        The file could not be written completely.
+    """
+    opts = {
+        "interval": interval, "major_interval": major_interval, "contours": contours,
+        "width": width, "major_width": major_width, "dense_spacing": dense_spacing,
+        "generalize": generalize, "bands": bands, "cmap": cmap, "sea_level": sea_level,
+        "vmin": vmin, "vmax": vmax, "relief": relief, "azimuth": azimuth,
+        "altitude": altitude, "variant": variant, "shadows": shadows, "sky_view": sky_view,
+    }  # fmt: skip
+    colour = _validate.rgb(contour_color, "contour_color")
+    map_dpi = dpi if scale is not None else None  # with a scale it sizes the map too
+    z_factor = _check_map_args(width, major_width, dense_spacing, size, scale, map_dpi, z_factor)
+    style = relief_style(relief)
+    d, options = _map_dem(dem, **opts, z_factor=z_factor, size=size, scale=scale, dpi=map_dpi)
+    h, w = d.shape
+    whole = shadows or style in ("texture", "local_relief") or _dask.is_dask(d.heights)
+    if whole or h * w < LARGE_IMAGE:
+        image = topographic_map(d, contour_color=contour_color, **opts, z_factor=z_factor)
+        write_png(path, image, dpi=dpi)
+        return image.shape[0], image.shape[1]
+    block, halo = _map_block(d, colour, options)
+    rows = max(STREAM_ROWS, 8 * halo)
+    starts = range(0, h, rows)
+    z = d.heights
+
+    def encode(r0: int) -> tuple[bytes, int, int]:
+        r1 = min(r0 + rows, h)
+        a0, a1 = max(0, r0 - halo), min(h, r1 + halo)
+        with on_this_thread():  # the other cores map other blocks
+            rgba = block(z[a0:a1], (slice(r0 - a0, r1 - a0), slice(0, w)))
+        return encode_png_rows(rgba, last=r1 == h)
+
+    write_png_blocks(path, (h, w, 4), _in_order(encode, starts, threads()), dpi=dpi)
+    return h, w
+
+
+def _map_block(d: DEM, colour: np.ndarray, options: dict) -> tuple[Callable, int]:
+    """:func:`~.terrain_chunked.window_map` of an in-memory DEM with the checked options of
+    :func:`_map_dem`: the whole-grid numbers as :func:`~._map.map_layers` takes them (the same
+    functions on the same heights), every option checked before a block is mapped."""
+    o = options
+    z = d.heights
+    dx, dy = d.pixel_size
+    style = relief_style(o["relief"])
+    lo, hi, interval, major = contour_intervals(z, o["interval"], o["major_interval"])
+    vmin, vmax = o["vmin"], o["vmax"]
+    tables = map_band_tables(o["bands"], interval, major, o["cmap"], lo if vmin is None else vmin,
+                             hi if vmax is None else vmax, o["sea_level"])  # fmt: skip
+    lines = {"interval": interval, "major_interval": major, "width": o["width"],
+             "major_width": o["major_width"]}  # fmt: skip
+    ink = {**lines, "dense_spacing": o["dense_spacing"], "generalize": o["generalize"]}
+    light = None
+    flat = 1.0
+    halo = RELIEF_HALO
+    if style is not None:
+        z_factor = o["z_factor"]
+        if z_factor is None:
+            lattice = slope_lattice(z)
+            slope = float("nan") if lattice is None else median_ground_slope(*lattice, dx, dy)
+            z_factor = relief_z_factor(None, slope)
+        light = {"azimuth": o["azimuth"], "altitude": o["altitude"], "z_factor": z_factor,
+                 "variant": o["variant"]}  # fmt: skip
+        hillshade(np.zeros((3, 3), np.float32), dx=dx, dy=dy, **light)  # checks now
+        flat = relief_flat(style, dx=dx, dy=dy, **light)
+        light["style"] = style
+        halo += relief_reach(style, dx, dy)
+    bands = None
+    if o["generalize"] and tables is not None:
+        bands = {**lines, "bands": o["bands"]}
+    return window_map(colour, tables, ink if o["contours"] else None, light,
+                      bool(o["sky_view"]) and light is not None, dx, dy, flat, bands,
+                      halo)  # fmt: skip
+
+
+def _in_order(fn: Callable[[int], object], items: Iterable[int], workers: int) -> Iterator[object]:
+    """``fn`` of each item, in order, computed on ``workers`` threads at most two items
+    ahead each (memory for a few blocks); the rest cancelled if the consumer stops."""
+    it = iter(items)
+    pool = ThreadPoolExecutor(max_workers=max(1, workers), thread_name_prefix="sciviz_gbuf_map")
+    try:
+        pending = deque(pool.submit(fn, k) for k in itertools.islice(it, 2 * max(1, workers)))
+        while pending:
+            result = pending.popleft().result()
+            nxt = next(it, None)
+            if nxt is not None:
+                pending.append(pool.submit(fn, nxt))
+            yield result
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)

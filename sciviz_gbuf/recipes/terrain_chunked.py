@@ -37,7 +37,7 @@ from ._map import (
 )
 from ._relief import relief_flat, relief_reach, relief_shade, relief_style
 
-__all__ = ["RELIEF_HALO", "lazy_topographic_map"]
+__all__ = ["RELIEF_HALO", "lazy_topographic_map", "window_map"]
 
 #: Stencil radius of a map's relief: GDAL's 3x3 window on the grid whose nodata ring is
 #: extrapolated from up to 2 cells further.
@@ -226,10 +226,32 @@ def _windowed_map(
 ):
     """The map of heights that can be read by window (:func:`~sciviz_gbuf._dask.map_windows`):
     one task per chunk reads the chunk with the widest halo any layer needs and computes every
-    layer and the composite from it. Each layer's cells see the same neighbourhood as in
-    memory (a wider halo than a layer's own radius changes none of its cells), so the pixels
-    are those of the in-memory map; no task waits for another's data, so a worker's memory is
-    that of the chunks it computes, whatever the DEM's size."""
+    layer and the composite from it (:func:`window_map`); no task waits for another's data,
+    so a worker's memory is that of the chunks it computes, whatever the DEM's size."""
+    block, halo = window_map(colour, tables, ink_options, light, sky_view, dx, dy, flat,
+                             band_options, relief_halo)  # fmt: skip
+    return _chunks.map_windows(block, z, halo=halo, dtype=np.uint8, bands=4)
+
+
+def window_map(
+    colour: np.ndarray,
+    tables,
+    ink_options: dict | None,
+    light: dict | None,
+    sky_view: bool,
+    dx: float,
+    dy: float,
+    flat: float,
+    band_options: dict | None = None,
+    relief_halo: int = RELIEF_HALO,
+):
+    """``(block, halo)``: ``block(window, inner)`` computes every layer of the map and the
+    composite from ``window``, heights read with up to ``halo`` cells around the cells
+    ``inner`` (a (rows, cols) pair of slices) whose RGBA it returns. Each layer's cells see
+    the same neighbourhood as in memory (a wider halo than a layer's own radius changes none
+    of its cells), so the pixels are those of the in-memory map. ``ink_options``: the
+    contours' options (None: no lines); ``light``: the relief's (with ``style``; None: no
+    relief); ``band_options``: a generalised map's band heights' (None: the heights)."""
     halo = 0
     if ink_options is not None:
         # the contour stencil, plus with generalisation its smoothing and ring size
@@ -261,4 +283,4 @@ def _windowed_map(
                 lay["band_z"] = band_z[inner]
         return composite(lay, np.ascontiguousarray(window[inner]), colour)
 
-    return _chunks.map_windows(block, z, halo=halo, dtype=np.uint8, bands=4)
+    return block, halo

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["encode_png", "phys_chunk", "write_png_fast"]
+__all__ = ["encode_png", "encode_rows", "phys_chunk", "write_png_fast", "write_png_parts"]
 
 try:
     from isal import isal_zlib as _deflate
@@ -37,7 +37,7 @@ def _chunk(kind: bytes, data: bytes) -> bytes:
         struct.pack(">I", len(data))
         + kind
         + data
-        + struct.pack(">I", zlib.crc32(data, zlib.crc32(kind)))
+        + struct.pack(">I", _deflate.crc32(data, _deflate.crc32(kind)))
     )
 
 
@@ -53,6 +53,57 @@ def _filtered_block(a: np.ndarray, r0: int, r1: int) -> bytes:
     else:
         np.subtract(rows, above, out=out[:, 1:])
     return out.tobytes()
+
+
+def encode_rows(rows: np.ndarray, *, last: bool, level: int = 1) -> tuple[bytes, int, int]:
+    """One IDAT chunk of a block of rows (uint8 ``(n, W)`` or ``(n, W, C)``) that needs no
+    other block: its first row filtered by PNG's "Sub" (type 1: each byte minus the byte one
+    pixel to its left), the others "Up", deflated raw and ended by a full flush, or by the end
+    of the zlib stream if ``last``. Blocks of one image encoded this way, in any order or at
+    once, join in order into its IDAT data (:func:`write_png_parts`). Returns the chunk, the
+    Adler-32 of the filtered bytes and their number."""
+    a = np.ascontiguousarray(rows, dtype=np.uint8)
+    n = a.shape[0]
+    flat = a.reshape(n, -1)
+    bpp = 1 if a.ndim == 2 else a.shape[2]
+    out = np.empty((n, flat.shape[1] + 1), dtype=np.uint8)
+    out[0, 0] = 1
+    out[0, 1 : 1 + bpp] = flat[0, :bpp]
+    np.subtract(flat[0, bpp:], flat[0, :-bpp], out=out[0, 1 + bpp :])
+    out[1:, 0] = 2
+    np.subtract(flat[1:], flat[:-1], out=out[1:, 1:])
+    raw = out.tobytes()
+    comp = _deflate.compressobj(min(max(level, 0), 3), zlib.DEFLATED, -15)
+    data = comp.compress(raw) + comp.flush(_deflate.Z_FINISH if last else _deflate.Z_FULL_FLUSH)
+    return _chunk(b"IDAT", data), _deflate.adler32(raw), len(raw)
+
+
+def write_png_parts(
+    path: Path, shape: tuple[int, ...], parts: Iterator[tuple[bytes, int, int]],
+    dpi: float | None = None,
+) -> int:  # fmt: skip
+    """Write a PNG of ``shape`` (H, W) or (H, W, C) whose rows come as the blocks of
+    :func:`encode_rows`, in order (the last one encoded with ``last=True``), each written as
+    it arrives. Returns the bytes written; OSError if the file on disk holds fewer."""
+    h, w = shape[:2]
+    c = 1 if len(shape) == 2 else shape[2]
+    header = struct.pack(">IIBBBBB", w, h, 8, _COLOUR_TYPE[c], 0, 0, 0)
+    written = 0
+    adler = 1
+    with open(path, "wb") as f:
+        written += f.write(b"\x89PNG\r\n\x1a\n" + _chunk(b"IHDR", header))
+        if dpi is not None:
+            written += f.write(phys_chunk(dpi))
+        written += f.write(_chunk(b"IDAT", b"\x78\x01"))
+        for chunk, part_adler, size in parts:
+            adler = _adler32_combine(adler, part_adler, size)
+            written += f.write(chunk)
+        written += f.write(_chunk(b"IDAT", struct.pack(">I", adler)))
+        written += f.write(_chunk(b"IEND", b""))
+    size = os.stat(path).st_size
+    if size != written:
+        raise OSError(errno.EIO, f"{size} bytes on disk of {written} written", str(path))
+    return written
 
 
 def _adler32_combine(a1: int, a2: int, len2: int) -> int:

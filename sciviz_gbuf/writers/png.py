@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Iterable
 from pathlib import Path
 
 import numpy as np
@@ -10,9 +11,16 @@ import numpy as np
 from .. import _validate
 from .._atomic import atomic_output
 from ..errors import InputError
-from ._png_encoder import write_png_fast
+from ._png_encoder import encode_rows, write_png_fast, write_png_parts
 
-__all__ = ["LARGE_IMAGE", "check_image", "to_uint8", "write_png"]
+__all__ = [
+    "LARGE_IMAGE",
+    "check_image",
+    "encode_png_rows",
+    "to_uint8",
+    "write_png",
+    "write_png_blocks",
+]
 
 #: Images of at least this many pixels are encoded fast (multithreaded, low zlib level).
 LARGE_IMAGE = 4_000_000
@@ -101,4 +109,34 @@ def write_png(path: str | os.PathLike, image: np.ndarray, *, dpi: float | None =
                 # Pillow writes through this buffered file: the size it reached is what the
                 # disk must hold once the buffer is flushed by close().
                 part.expected_size = f.tell()
+    return p
+
+
+def encode_png_rows(rows: np.ndarray, *, last: bool) -> tuple[bytes, int, int]:
+    """A block of rows of a PNG (uint8 ``(n, W)``, ``(n, W, 3)`` or ``(n, W, 4)``), filtered
+    and deflated on its own, for :func:`write_png_blocks`; ``last``: the image's last block.
+    Blocks may be encoded at once on several threads (the deflate releases the GIL)."""
+    return encode_rows(rows, last=last)
+
+
+def write_png_blocks(
+    path: str | os.PathLike, shape: tuple[int, ...], blocks: Iterable[tuple[bytes, int, int]],
+    *, dpi: float | None = None,
+) -> Path:  # fmt: skip
+    """Write a PNG of ``shape`` ((H, W), (H, W, 3) or (H, W, 4), uint8) from its blocks of
+    rows encoded by :func:`encode_png_rows`, top to bottom, each written as it comes: the
+    image is never whole in memory. Same checks, ``dpi`` and atomic write as
+    :func:`write_png` (a failure while the blocks are made leaves no file)."""
+    p = Path(path)
+    if p.suffix.lower() != ".png":
+        raise InputError(f"path: expected a file name ending in .png, got {str(p)!r}")
+    if not p.parent.is_dir():
+        raise InputError(f"path: no such directory {str(p.parent)!r}")
+    if dpi is not None:
+        dpi = _validate.size(dpi, "dpi", "dpi")
+    ok = len(shape) == 2 or (len(shape) == 3 and shape[2] in (3, 4))
+    if not ok or min(shape[:2]) < 1:
+        raise InputError(f"shape: expected (H, W), (H, W, 3) or (H, W, 4), got {tuple(shape)}")
+    with atomic_output(path) as part:
+        write_png_parts(part.path, tuple(int(v) for v in shape), iter(blocks), dpi)
     return p

@@ -300,6 +300,48 @@ def test_geotiff_round_trip(tmp_path):
     assert geo.geographic and geo.pixel_size == pytest.approx((0.001 * m_lon, 0.001 * m_lat))
 
 
+@pytest.mark.parametrize(
+    ("dtype", "nodata", "layout"),
+    [
+        ("float32", -9999.0, {"tiled": True, "blockxsize": 16, "blockysize": 16,
+                              "compress": "deflate"}),
+        ("float32", None, {}),  # strips
+        ("int16", None, {"tiled": True, "blockxsize": 32, "blockysize": 32}),
+        ("uint16", 0, {"compress": "lzw"}),
+        ("float64", float("nan"), {}),
+    ],
+)  # fmt: skip
+@pytest.mark.parametrize("threads", ["1", "3"])
+def test_large_geotiff_read_by_threads_equals_a_plain_read(
+    tmp_path, monkeypatch, dtype, nodata, layout, threads
+):
+    """A raster past the threshold is read by row windows on threads: the heights of a plain
+    whole-band read, as float32 with NaN at nodata, whatever the type, block layout and
+    compression (windows cut at blocks, a last short one)."""
+    rasterio = pytest.importorskip("rasterio")
+    from sciviz_gbuf.readers import _dem_files
+
+    monkeypatch.setattr(_dem_files, "PARALLEL_READ_CELLS", 100)
+    monkeypatch.setenv("NUMBA_NUM_THREADS", threads)
+    rng = np.random.default_rng(3)
+    values = (rng.random((77, 45)) * 3000).astype(dtype)
+    if nodata is not None:
+        values[rng.random(values.shape) < 0.1] = nodata
+    path = tmp_path / "big.tif"
+    profile = {"driver": "GTiff", "width": 45, "height": 77, "count": 1, "dtype": dtype,
+               "nodata": nodata, "crs": "EPSG:32613",
+               "transform": rasterio.Affine(10.0, 0, 4e5, 0, -10.0, 4.4e6), **layout}  # fmt: skip
+    with rasterio.open(path, "w", **profile) as dst:
+        dst.write(values, 1)
+    expected = values.astype(np.float32)
+    if nodata is not None:
+        expected[(values == nodata) | np.isnan(values.astype(np.float64))] = np.nan
+    got = read_dem(path)
+    assert got.heights.dtype == np.float32
+    np.testing.assert_array_equal(got.heights, expected)
+    np.testing.assert_array_equal(got.mask, np.isfinite(expected))
+
+
 @pytest.mark.filterwarnings("ignore:Dataset has no geotransform")
 def test_geotiff_rgb_and_ungeoreferenced(tmp_path):
     rasterio = pytest.importorskip("rasterio")
