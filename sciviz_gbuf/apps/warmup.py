@@ -18,11 +18,21 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+import threading
 import warnings
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 
-__all__ = ["COLD_MARKERS", "JOBS", "main", "numba_cache_is_cold", "run_steps", "start", "stop"]
+__all__ = [
+    "COLD_MARKERS",
+    "JOBS",
+    "main",
+    "numba_cache_is_cold",
+    "preload_map",
+    "run_steps",
+    "start",
+    "stop",
+]
 
 
 #: The kernel whose cache index tells a first run, per job: one that every run of it calls.
@@ -90,6 +100,33 @@ def stop(proc: subprocess.Popen | None) -> None:
         return
     proc.kill()
     proc.wait()
+
+
+def preload_map(**options: object) -> threading.Thread:
+    """Start a thread that maps a tiny grid with a map's ``options`` (those of
+    :func:`~sciviz_gbuf.recipes.terrain.topographic_map` that choose its kernels): numba
+    loads each kernel the map will call from its cache (or compiles it) while the job reads
+    its DEM, which waits for the disk and GDAL without holding the GIL. The job joins the
+    thread before it maps; an error here only leaves a kernel for the job to load."""
+
+    def run() -> None:
+        import numpy as np
+
+        from ..recipes.terrain import topographic_map
+
+        ramp = np.add.outer(np.arange(40), np.arange(48)) * 2.0
+        z = ramp.astype(np.float32)
+        z[3:6, 4:9] = np.nan
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            try:
+                topographic_map(z, **options)
+            except Exception:
+                return
+
+    thread = threading.Thread(target=run, name="sciviz_gbuf_preload", daemon=True)
+    thread.start()
+    return thread
 
 
 def _topo_steps() -> Iterator[Callable[[], object]]:

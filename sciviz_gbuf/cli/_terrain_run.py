@@ -10,6 +10,7 @@ import time
 from pathlib import Path
 
 from .._progress import progress
+from ..apps.warmup import preload_map
 from ..apps.warmup import start as start_warmup
 from ..apps.warmup import stop as stop_warmup
 from ..compose import write_geotiff, write_png
@@ -231,7 +232,12 @@ def _topo_in_memory(
     args: argparse.Namespace, source, out: Path, tif: bool, show: bool, t0: float
 ) -> int:
     with progress(show, 2 + (args.geotiff is not None), "topo") as bar:
+        # the map's kernels load on another thread while the DEM is read
+        opts = _topo_options(args, False)
+        kernels = {k: opts[k] for k in ("generalize", "relief", "variant", "sky_view")}
+        loader = preload_map(**kernels)
         dem = _read_terrain(source, args.geographic)
+        loader.join()
         bar.step("map")
         if not tif and args.geotiff is None and not args.labels:
             # mapped and written block by block (the same pixels, mapping and deflating at once)

@@ -48,7 +48,6 @@ import itertools
 import math
 
 import numpy as np
-from scipy import ndimage
 
 from ..core.bands import run_bands, threads
 from . import _contour_kernels as _k
@@ -88,6 +87,8 @@ def _kernels(sigma: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 def _pass(a: np.ndarray, w: np.ndarray, axis: int) -> np.ndarray:
     # Outside the grid counts as no data (weight 0), like a nodata cell: the same rule at the
     # grid's edge as at a chunk cut by the grid's edge.
+    from scipy import ndimage  # the references only: not imported by a map
+
     return ndimage.correlate1d(a, w, axis=axis, mode="constant", cval=0.0)
 
 
@@ -266,6 +267,8 @@ def smooth_strip_reference(
     # the exact field's gradient is 0, so no line is drawn there (a value equal to a level
     # counts as above it); the smoothed gradient would still reach there from the slope and
     # make a wide line flood the flat ground at its level: zero it, as for the exact field.
+    from scipy import ndimage
+
     flat = ndimage.maximum_filter(np.where(valid, z64, -np.inf), 3) == ndimage.minimum_filter(
         np.where(valid, z64, np.inf), 3
     )
@@ -462,6 +465,8 @@ def band_heights_reference(
     """:func:`band_heights` with ``scipy.ndimage``: a labelling of the whole grid per band and
     the nearest cell by the Euclidean distance transform (ties and chains of islands aside,
     the same cells; the tests compare them)."""
+    from scipy import ndimage
+
     s = np.where(valid, z, np.nan).astype(np.float32)
     if min_ring <= 0 or not valid.any():
         return s

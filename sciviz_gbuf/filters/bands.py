@@ -38,10 +38,30 @@ def _colormap(name: str, colours) -> object:
     return LinearSegmentedColormap.from_list(name, colours, N=_LUT)
 
 
-HYPSOMETRIC = _colormap("sciviz_hypsometric", _LAND)
-"""Default land colour map of :func:`color_bands` (a matplotlib ``Colormap``)."""
-BATHYMETRIC = _colormap("sciviz_bathymetric", _SEA)
-"""Default sea colour map of :func:`color_bands`, deep to shallow."""
+#: The default colour maps, made on first use (matplotlib is imported then, not with the
+#: module): ``HYPSOMETRIC``, the default land colour map of :func:`color_bands` (a matplotlib
+#: ``Colormap``, green - yellow - brown - grey - white), and ``BATHYMETRIC``, its default sea
+#: colour map, deep to shallow.
+_DEFAULT_MAPS = {
+    "HYPSOMETRIC": ("sciviz_hypsometric", _LAND),
+    "BATHYMETRIC": ("sciviz_bathymetric", _SEA),
+}
+
+
+HYPSOMETRIC: object  # made by __getattr__ on first use
+BATHYMETRIC: object
+
+
+def __getattr__(name: str) -> object:
+    if name in _DEFAULT_MAPS:
+        cm = _colormap(*_DEFAULT_MAPS[name])
+        globals()[name] = cm  # made once
+        return cm
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def _default_map(name: str) -> object:
+    return globals()[name] if name in globals() else __getattr__(name)
 
 
 def _lut(cm) -> np.ndarray:
@@ -71,8 +91,12 @@ def band_tables(
     if interval is not None and levels is not None:
         raise InputError("color_bands: give interval= or levels=, not both")
     base = _validate.finite(base, "base")
-    land = _lut(HYPSOMETRIC if cmap is None else _validate.colormap(cmap, "cmap"))
-    sea = _lut(BATHYMETRIC if sea_cmap is None else _validate.colormap(sea_cmap, "sea_cmap"))
+    land = _lut(_default_map("HYPSOMETRIC") if cmap is None else _validate.colormap(cmap, "cmap"))
+    sea = _lut(
+        _default_map("BATHYMETRIC")
+        if sea_cmap is None
+        else _validate.colormap(sea_cmap, "sea_cmap")
+    )
     lo = float(data.min()) if vmin is None else _validate.finite(vmin, "vmin")
     hi = float(data.max()) if vmax is None else _validate.finite(vmax, "vmax")
     if not (np.isfinite(lo) and np.isfinite(hi) and lo <= hi):

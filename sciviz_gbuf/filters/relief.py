@@ -16,8 +16,6 @@ heights' units) and work on numpy and dask arrays alike.
 from __future__ import annotations
 
 import numpy as np
-from scipy import fft as _fft
-from scipy import ndimage
 
 from .. import _dask as _chunks
 from .. import _validate
@@ -94,6 +92,8 @@ def _fill_residual(r: np.ndarray) -> np.ndarray:
     valid = np.isfinite(r)
     if valid.all():
         return r
+    from scipy import ndimage  # imported by the relief styles that use it, not by every map
+
     opts = {"sigma": _FILL_SIGMA, "truncate": FILL_RADIUS / _FILL_SIGMA, "mode": "constant"}
     num = ndimage.gaussian_filter(np.where(valid, r, 0.0), **opts)
     den = ndimage.gaussian_filter(valid.astype(np.float64), **opts)
@@ -112,6 +112,8 @@ def _gain(shape: tuple[int, int], offset: tuple[int, int], full: tuple[int, int]
 
 
 def _dct_rows(a: np.ndarray, inverse: bool = False) -> np.ndarray:
+    from scipy import fft as _fft
+
     f = _fft.idct if inverse else _fft.dct
     return f(a, type=2, axis=1, norm="ortho", workers=-1)
 
@@ -119,6 +121,8 @@ def _dct_rows(a: np.ndarray, inverse: bool = False) -> np.ndarray:
 def _texture_cols(a: np.ndarray, detail: float, dx: float, dy: float, full, block_info=None):
     """The column transform, the gain and the inverse column transform of a block of whole
     columns (the middle of the separable filter)."""
+    from scipy import fft as _fft
+
     c0 = 0 if block_info is None else block_info[0]["array-location"][1][0]
     spectrum = _fft.dct(a, type=2, axis=0, norm="ortho", workers=-1)
     spectrum *= _gain(a.shape, (0, c0), full, detail, dx, dy)

@@ -13,7 +13,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy import ndimage
 
 from .. import _dask as _chunks
 from .. import _validate
@@ -43,6 +42,8 @@ def _local_max(z: np.ndarray, radius: float, dx: float, dy: float) -> np.ndarray
     """Highest cell within ``radius`` metres of each cell (a box, plus the interpolation
     neighbour): where the rays' march is limited, a far tighter bound than the row/column maxima
     on rough terrain."""
+    from scipy import ndimage  # the per-cell references only: not imported by a map
+
     h, w = z.shape
     half_r = min(math.ceil(radius / dy) + 1, h)
     half_c = min(math.ceil(radius / dx) + 1, w)
