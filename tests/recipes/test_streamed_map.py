@@ -43,6 +43,7 @@ def streamed(monkeypatch):
     """Small maps stream too, in blocks of 8 rows (so many block borders and halos)."""
     monkeypatch.setattr(terrain, "LARGE_IMAGE", 1)
     monkeypatch.setattr(terrain, "STREAM_ROWS", 8)
+    monkeypatch.setattr(terrain, "STREAM_HALOS", 0)
     calls = []
     real = terrain.window_map
 
@@ -97,6 +98,7 @@ def test_streamed_map_of_odd_grids(rows, cols, seed, generalize, block):
     with pytest.MonkeyPatch.context() as mp, tempfile.TemporaryDirectory() as tmp:
         mp.setattr(terrain, "LARGE_IMAGE", 1)
         mp.setattr(terrain, "STREAM_ROWS", block)
+        mp.setattr(terrain, "STREAM_HALOS", 0)
         write_topographic_png(Path(tmp) / "m.png", z, generalize=generalize)
         assert np.array_equal(_png(Path(tmp) / "m.png"), ref)
 
@@ -107,6 +109,7 @@ def test_a_short_halo_would_show(monkeypatch, tmp_path):
     ref = topographic_map(d, generalize=False)
     monkeypatch.setattr(terrain, "LARGE_IMAGE", 1)
     monkeypatch.setattr(terrain, "STREAM_ROWS", 8)
+    monkeypatch.setattr(terrain, "STREAM_HALOS", 0)
     real = terrain.window_map
     monkeypatch.setattr(terrain, "window_map", lambda *a: (real(*a)[0], real(*a)[1] - 1))
     write_topographic_png(tmp_path / "m.png", d, generalize=False)
@@ -138,6 +141,7 @@ def test_bad_options_and_paths(tmp_path):
 def test_a_failing_block_leaves_no_file(monkeypatch, tmp_path):
     monkeypatch.setattr(terrain, "LARGE_IMAGE", 1)
     monkeypatch.setattr(terrain, "STREAM_ROWS", 4)
+    monkeypatch.setattr(terrain, "STREAM_HALOS", 0)
 
     def broken(*a, **k):
         raise MemoryError("block 3")
@@ -209,6 +213,7 @@ def test_run_bands_on_this_thread():
 def test_cli_png_streams_the_pixels_of_the_whole_map(monkeypatch, tmp_path, capsys):
     monkeypatch.setattr(terrain, "LARGE_IMAGE", 1)
     monkeypatch.setattr(terrain, "STREAM_ROWS", 16)
+    monkeypatch.setattr(terrain, "STREAM_HALOS", 0)
     path = DATA / "pre_runout_DEM.asc"
     if not path.is_file():
         pytest.skip(f"{path} not available")
