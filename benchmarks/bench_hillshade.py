@@ -149,7 +149,11 @@ def main() -> None:
             lambda a=layers, o=rgba: BK.map_image_fast(*a, o))  # fmt: skip
         row("map composite, out=, per-pixel loop (before)",
             lambda a=layers, o=rgba: BK.map_image(*a, o), reps=1)  # fmt: skip
+        bands_out = np.empty((n, n, 4), np.float32)
+        row("color_bands, out= (float32 RGBA, 16 bytes a cell)",
+            lambda z=z, o=bands_out: color_bands(z, interval=100.0, out=o))  # fmt: skip
         row("color_bands, new float32 RGBA", lambda z=z: color_bands(z, interval=100.0), reps=1)
+        del bands_out
         del rgba, relief, ink
         ls = LightSource(azdeg=315, altdeg=45)
         row("matplotlib LightSource.hillshade",

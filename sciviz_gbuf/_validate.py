@@ -34,6 +34,7 @@ __all__ = [
     "levels",
     "mask",
     "number_in",
+    "out_array",
     "positive",
     "rgb",
     "size",
@@ -327,3 +328,20 @@ def colormap(cmap: object, name: str = "cmap"):
     if not callable(cm):
         raise InputError(f"{name}: expected a colour map name or Colormap, got {brief(cmap)}")
     return cm
+
+
+def out_array(out: object, shape: tuple[int, ...], source: object) -> np.ndarray:
+    """``out`` as an operator's preallocated result: a C-contiguous, writeable float32
+    array of ``shape`` that shares no memory with ``source`` (the kernel reads the source
+    while it writes the result)."""
+    if not isinstance(out, np.ndarray):
+        raise InputError(f"out: expected a numpy array, got {type(out).__name__}")
+    if out.dtype != np.float32 or out.shape != tuple(shape):
+        raise InputError(
+            f"out: expected a float32 array of shape {tuple(shape)}, got {out.dtype} {out.shape}"
+        )
+    if not out.flags.c_contiguous or not out.flags.writeable:
+        raise InputError("out: expected a C-contiguous, writeable array")
+    if isinstance(source, np.ndarray) and np.shares_memory(out, source):
+        raise InputError("out: shares memory with the heights; pass a separate array")
+    return out

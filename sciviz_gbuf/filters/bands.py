@@ -153,6 +153,7 @@ def color_bands(
     sea_level: float | None = None,
     sea_cmap: str | object | None = None,
     mask: np.ndarray | None = None,
+    out: np.ndarray | None = None,
 ) -> np.ndarray:
     """Colour an image by height: discrete bands, a continuous ramp, or topo-bathymetry.
 
@@ -181,12 +182,18 @@ def color_bands(
         Default :data:`BATHYMETRIC` (deep blue to pale blue).
     mask : (H, W) bool, optional
         False marks nodata.
+    out : (H, W, 4) float32 array, optional
+        C-contiguous, writeable and apart from ``heights``: written and returned instead of a
+        new array (an (H, W) image's colours are 16 bytes a cell: fresh memory costs more to
+        touch than the kernel takes to fill it). Not with dask input.
 
     Returns
     -------
     (H, W, 4) float32 RGBA in [0, 1]: alpha 1 on data, 0 (and black) at nodata.
     """
     if _chunks.any_dask(heights, mask):
+        if out is not None:
+            raise InputError("out: not supported with dask input (the result is lazy)")
         return _chunked_bands(heights, mask, vmin, vmax, **{
             "interval": interval, "levels": levels, "base": base, "cmap": cmap,
             "sea_level": sea_level, "sea_cmap": sea_cmap})  # fmt: skip
@@ -211,7 +218,10 @@ def color_bands(
         sea_level=sea_level,
         sea_cmap=sea_cmap,
     )
-    out = np.empty((*v.shape, 4), dtype=np.float32)
+    if out is None:
+        out = np.empty((*v.shape, 4), dtype=np.float32)
+    else:
+        out = _validate.out_array(out, (*v.shape, 4), heights)
     if not any_valid:
         out[:] = 0.0
         return out

@@ -14,7 +14,7 @@ from .. import _validate
 from ..errors import InputError
 from . import _hillshade_kernels as _k
 
-__all__ = ["FILL_RING_RADIUS", "RADIUS", "check_out", "fill_nodata_ring", "hillshade"]
+__all__ = ["FILL_RING_RADIUS", "RADIUS", "fill_nodata_ring", "hillshade"]
 
 #: Cells read around each output cell (GDAL's 3x3 window), for chunked evaluation.
 RADIUS = 1
@@ -169,7 +169,7 @@ def hillshade(
     # infinities first would cost a third of the shading).
     z32 = float32_heights(z, mask) if mask is not None else np.ascontiguousarray(z, np.float32)
     if out is not None:
-        out = check_out(out, z32.shape, heights)
+        out = _validate.out_array(out, z32.shape, heights)
     # GDAL: inv_ewres = 1 / geotransform[1], inv_nsres = 1 / geotransform[5] (negative: north-up).
     return _k.hillshade_kernel(
         z32,
@@ -182,23 +182,6 @@ def hillshade(
         _VARIANTS[variant],
         out,
     )
-
-
-def check_out(out: object, shape: tuple[int, ...], source: object) -> np.ndarray:
-    """``out`` as an operator's preallocated result: a C-contiguous, writeable float32
-    array of ``shape`` that shares no memory with ``source`` (the kernel reads the source
-    while it writes the result)."""
-    if not isinstance(out, np.ndarray):
-        raise InputError(f"out: expected a numpy array, got {type(out).__name__}")
-    if out.dtype != np.float32 or out.shape != tuple(shape):
-        raise InputError(
-            f"out: expected a float32 array of shape {tuple(shape)}, got {out.dtype} {out.shape}"
-        )
-    if not out.flags.c_contiguous or not out.flags.writeable:
-        raise InputError("out: expected a C-contiguous, writeable array")
-    if isinstance(source, np.ndarray) and np.shares_memory(out, source):
-        raise InputError("out: shares memory with the heights; pass a separate array")
-    return out
 
 
 def fill_nodata_ring(z: np.ndarray) -> np.ndarray:

@@ -166,3 +166,23 @@ def test_vectorised_composite_is_the_reference_bit_for_bit(shape, kind, sea, lay
     bk.map_image(*args, want)
     bk.map_image_fast(*args, got)
     np.testing.assert_array_equal(got, want)
+
+
+def test_color_bands_out_is_written_and_returned():
+    """``out=``: the same colours written into the caller's array (every stale value
+    overwritten, nodata included), and the array returned; bad arrays are refused."""
+    rng = np.random.default_rng(4)
+    z = (rng.random((37, 41)) * 900).astype(np.float32)
+    z[5:9, 3:12] = np.nan
+    expected = color_bands(z, interval=100.0)
+    out = np.full((37, 41, 4), 7.0, np.float32)
+    assert color_bands(z, interval=100.0, out=out) is out
+    np.testing.assert_array_equal(out, expected)
+    for bad, match in (
+        (np.empty((37, 41, 3), np.float32), "shape"),
+        (np.empty((37, 41, 4), np.float64), "float32"),
+        (np.empty((41, 37, 4), np.float32).transpose(1, 0, 2), "C-contiguous"),
+        ([[0.0]], "numpy array"),
+    ):
+        with pytest.raises(InputError, match=match):
+            color_bands(z, interval=100.0, out=bad)
