@@ -40,6 +40,8 @@ from typing import Any, BinaryIO
 
 import numpy as np
 
+from ._cog_kernels import halve_rows
+
 try:
     from isal import isal_zlib as _deflate
 
@@ -119,7 +121,17 @@ def worker_levels(chunks: Sequence[Sequence[int]], n_levels: int) -> int:
 def halve(a: np.ndarray) -> np.ndarray:
     """The next overview level of an (h, w, c) uint8 image: each pixel the rounded mean of
     the 2 x 2 below it (1 or 2 at an odd edge); with c == 4 the colour is weighted by alpha
-    (0 where all four are transparent)."""
+    (0 where all four are transparent). One pass of :func:`._cog_kernels.halve_rows` on the
+    calling thread (a block's worker); :func:`halve_reference` is the numpy statement."""
+    a = np.ascontiguousarray(a, dtype=np.uint8)
+    h, w, c = a.shape
+    out = np.empty(((h + 1) // 2, (w + 1) // 2, c), np.uint8)
+    halve_rows(0, out.shape[0], a, out)
+    return out
+
+
+def halve_reference(a: np.ndarray) -> np.ndarray:
+    """:func:`halve` by numpy expressions (the statement the kernel is tested against)."""
     h, w, c = a.shape
     h2, w2 = (h + 1) // 2, (w + 1) // 2
     if h % 2 or w % 2:

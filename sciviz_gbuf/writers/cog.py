@@ -36,7 +36,7 @@ from ._cog_layout import (
     worker_levels,
 )
 from .geotiff import check_tiff, georeference, rasterio_crs
-from .png import to_uint8, write_png
+from .png import check_image, to_uint8, write_png
 
 __all__ = [
     "BYTES_PER_MAP_CELL",
@@ -345,7 +345,9 @@ def _png_path(path: str | os.PathLike) -> Path:
 def _as_uint8(image: Any):
     """(H, W, C) uint8, C in 1, 3, 4: numpy converted now, dask lazily (per block)."""
     if not _dask.is_dask(image):
-        a = to_uint8(image)  # checks shape and dtype with write_geotiff's messages
+        a = check_image(image)  # shape and dtype, with write_geotiff's messages
+        # uint8 is read as it is (the encoder only reads it: no copy of a 256 MB map)
+        a = a if a.dtype == np.uint8 else to_uint8(a)
         return a[..., None] if a.ndim == 2 else a
     if not (image.ndim == 2 or (image.ndim == 3 and image.shape[2] in (3, 4))):
         raise InputError(f"image: expected shape (H, W), (H, W, 3) or (H, W, 4), got {image.shape}")

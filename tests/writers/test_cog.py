@@ -9,6 +9,8 @@ import pytest
 
 da = pytest.importorskip("dask.array")
 rasterio = pytest.importorskip("rasterio")
+from hypothesis import given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
 from PIL import Image  # noqa: E402
 
 from sciviz_gbuf.cli import main  # noqa: E402
@@ -386,3 +388,30 @@ def test_one_tile_and_one_pixel(tmp_path):
         out = write_cog(written, tmp_path / f"s{shape[0]}x{shape[1]}.tif", transform=TRANSFORM)
         check_cog(out)
         np.testing.assert_array_equal(_read(out), image)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st.integers(1, 23), st.integers(1, 23), st.sampled_from([1, 3, 4]), st.integers(0, 2**31),
+    st.floats(0.0, 1.0),
+)  # fmt: skip
+def test_overview_kernel_equals_the_numpy_statement(h, w, c, seed, clear):
+    """The kernel that halves a level (odd edges, transparent pixels, any band count) writes
+    the bytes of the numpy statement it replaced."""
+    from sciviz_gbuf.writers import _cog_layout
+
+    rng = np.random.default_rng(seed)
+    a = rng.integers(0, 256, (h, w, c), dtype=np.uint8)
+    if c == 4:
+        a[..., 3][rng.random((h, w)) < clear] = 0
+    np.testing.assert_array_equal(_cog_layout.halve(a), _cog_layout.halve_reference(a))
+
+
+def test_uint8_image_is_not_copied_or_changed(tmp_path):
+    """A uint8 map is read as it is (no copy of the whole image) and left unchanged."""
+    rng = np.random.default_rng(2)
+    img = rng.integers(0, 256, (600, 700, 4), dtype=np.uint8)
+    before = img.copy()
+    write_cog(img, tmp_path / "m.tif", transform=(400000.0, 10.0, 0.0, 4.5e6, 0.0, -10.0),
+              crs="EPSG:32613")  # fmt: skip
+    np.testing.assert_array_equal(img, before)
