@@ -258,6 +258,23 @@ def _y_rows(
             j = k
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def _cofactors(m0: float, my: float, myy: float, mx: float, mxy: float, mxx: float,
+               s4: float) -> tuple:  # fmt: skip
+    """The cofactors ``c00 c01 c02 c11 c12 c22`` of ``[[m0 mx my] [mx mxx mxy] [my mxy
+    myy]]``, whether the cells span a plane (``det > s4 m0^3``) and ``1 / det`` (0 if not)."""
+    c00 = mxx * myy - mxy * mxy
+    c01 = mxy * my - mx * myy
+    c02 = mx * mxy - mxx * my
+    det = m0 * c00 + mx * c01 + my * c02
+    c11 = m0 * myy - my * my
+    c12 = mx * my - m0 * mxy
+    c22 = m0 * mxx - mx * mx
+    ok = det > s4 * m0 * m0 * m0
+    inv = 1.0 / det if ok else 0.0
+    return c00, c01, c02, c11, c12, c22, ok, inv
+
+
 @njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
 def _solve(acc: np.ndarray, s4: float, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> None:
     """The plane ``(a, b, c)`` of each cell from its nine moments ``acc``: the 3 x 3 system
@@ -267,15 +284,7 @@ def _solve(acc: np.ndarray, s4: float, a: np.ndarray, b: np.ndarray, c: np.ndarr
     for j in range(a.shape[0]):
         m0, my, myy, mx, mxy = acc[0, j], acc[1, j], acc[2, j], acc[3, j], acc[4, j]
         mxx, mz, myz, mxz = acc[5, j], acc[6, j], acc[7, j], acc[8, j]
-        c00 = mxx * myy - mxy * mxy
-        c01 = mxy * my - mx * myy
-        c02 = mx * mxy - mxx * my
-        det = m0 * c00 + mx * c01 + my * c02
-        c11 = m0 * myy - my * my
-        c12 = mx * my - m0 * mxy
-        c22 = m0 * mxx - mx * mx
-        ok = det > s4 * m0 * m0 * m0
-        inv = 1.0 / det if ok else 0.0
+        c00, c01, c02, c11, c12, c22, ok, inv = _cofactors(m0, my, myy, mx, mxy, mxx, s4)
         a[j] = (c00 * mz + c01 * mxz + c02 * myz) * inv if ok else mz / m0
         b[j] = (c01 * mz + c11 * mxz + c12 * myz) * inv
         c[j] = (c02 * mz + c12 * mxz + c22 * myz) * inv
@@ -287,15 +296,7 @@ def _solve_full(mz: np.ndarray, myz: np.ndarray, mxz: np.ndarray, full: np.ndarr
     """:func:`_solve` where every cell has the mask moments ``full`` (the same operations on
     the same values: the same bits), the cofactors taken once."""
     m0, my, myy, mx, mxy, mxx = full[0], full[1], full[2], full[3], full[4], full[5]
-    c00 = mxx * myy - mxy * mxy
-    c01 = mxy * my - mx * myy
-    c02 = mx * mxy - mxx * my
-    det = m0 * c00 + mx * c01 + my * c02
-    c11 = m0 * myy - my * my
-    c12 = mx * my - m0 * mxy
-    c22 = m0 * mxx - mx * mx
-    ok = det > s4 * m0 * m0 * m0
-    inv = 1.0 / det if ok else 0.0
+    c00, c01, c02, c11, c12, c22, ok, inv = _cofactors(m0, my, myy, mx, mxy, mxx, s4)
     for j in range(a.shape[0]):
         a[j] = (c00 * mz[j] + c01 * mxz[j] + c02 * myz[j]) * inv if ok else mz[j] / m0
         b[j] = (c01 * mz[j] + c11 * mxz[j] + c12 * myz[j]) * inv

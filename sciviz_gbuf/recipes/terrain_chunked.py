@@ -211,25 +211,13 @@ def _band_z(z, band_options: dict):
     )  # fmt: skip
 
 
-def _windowed_map(
-    z,
-    colour: np.ndarray,
-    tables,
-    ink_options: dict | None,
-    light: dict | None,
-    sky_view: bool,
-    dx: float,
-    dy: float,
-    flat: float,
-    band_options: dict | None = None,
-    relief_halo: int = RELIEF_HALO,
-):
+def _windowed_map(z, *args, **kwargs):
     """The map of heights that can be read by window (:func:`~sciviz_gbuf._dask.map_windows`):
     one task per chunk reads the chunk with the widest halo any layer needs and computes every
-    layer and the composite from it (:func:`window_map`); no task waits for another's data,
-    so a worker's memory is that of the chunks it computes, whatever the DEM's size."""
-    block, halo = window_map(colour, tables, ink_options, light, sky_view, dx, dy, flat,
-                             band_options, relief_halo)  # fmt: skip
+    layer and the composite from it (:func:`window_map`, whose arguments follow ``z``); no
+    task waits for another's data, so a worker's memory is that of the chunks it computes,
+    whatever the DEM's size."""
+    block, halo = window_map(*args, **kwargs)
     return _chunks.map_windows(block, z, halo=halo, dtype=np.uint8, bands=4)
 
 

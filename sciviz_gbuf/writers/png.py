@@ -89,13 +89,7 @@ def write_png(path: str | os.PathLike, image: np.ndarray, *, dpi: float | None =
     """
     from PIL import Image
 
-    p = Path(path)
-    if p.suffix.lower() != ".png":
-        raise InputError(f"path: expected a file name ending in .png, got {str(p)!r}")
-    if not p.parent.is_dir():
-        raise InputError(f"path: no such directory {str(p.parent)!r}")
-    if dpi is not None:
-        dpi = _validate.size(dpi, "dpi", "dpi")
+    p, dpi = _png_target(path, dpi)
     pixels = check_image(image)
     if pixels.dtype != np.uint8:
         pixels = to_uint8(pixels)  # (uint8 is written as it is: the file only reads it)
@@ -110,6 +104,17 @@ def write_png(path: str | os.PathLike, image: np.ndarray, *, dpi: float | None =
                 # disk must hold once the buffer is flushed by close().
                 part.expected_size = f.tell()
     return p
+
+
+def _png_target(path: str | os.PathLike, dpi: float | None) -> tuple[Path, float | None]:
+    """``(path, dpi)`` of a PNG to write, checked: a ``.png`` name in an existing folder, a
+    DPI within ``LIMITS["dpi"]``."""
+    p = Path(path)
+    if p.suffix.lower() != ".png":
+        raise InputError(f"path: expected a file name ending in .png, got {str(p)!r}")
+    if not p.parent.is_dir():
+        raise InputError(f"path: no such directory {str(p.parent)!r}")
+    return p, (None if dpi is None else _validate.size(dpi, "dpi", "dpi"))
 
 
 def encode_png_rows(rows: np.ndarray, *, last: bool) -> tuple[bytes, int, int]:
@@ -127,13 +132,7 @@ def write_png_blocks(
     rows encoded by :func:`encode_png_rows`, top to bottom, each written as it comes: the
     image is never whole in memory. Same checks, ``dpi`` and atomic write as
     :func:`write_png` (a failure while the blocks are made leaves no file)."""
-    p = Path(path)
-    if p.suffix.lower() != ".png":
-        raise InputError(f"path: expected a file name ending in .png, got {str(p)!r}")
-    if not p.parent.is_dir():
-        raise InputError(f"path: no such directory {str(p.parent)!r}")
-    if dpi is not None:
-        dpi = _validate.size(dpi, "dpi", "dpi")
+    p, dpi = _png_target(path, dpi)
     ok = len(shape) == 2 or (len(shape) == 3 and shape[2] in (3, 4))
     if not ok or min(shape[:2]) < 1:
         raise InputError(f"shape: expected (H, W), (H, W, 3) or (H, W, 4), got {tuple(shape)}")

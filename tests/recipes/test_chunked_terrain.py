@@ -31,7 +31,7 @@ from sciviz_gbuf.filters import (
 from sciviz_gbuf.readers import read_dem
 from sciviz_gbuf.recipes import terrain_chunked
 from sciviz_gbuf.recipes.terrain import topographic_map
-from tests.helpers.paths import SHARED_DATA
+from tests.helpers.paths import SHARED_DATA, shared_dem
 
 da = pytest.importorskip("dask.array")
 
@@ -40,12 +40,7 @@ ODD = (7, 13)  # deliberately odd chunks: many chunk borders in both directions
 
 
 def _dem(name: str):
-    path = DATA / name
-    if not path.is_file():
-        pytest.skip(f"{path} not available")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UserWarning)  # the SRTM .asc has no CRS
-        return read_dem(path)
+    return shared_dem(name)
 
 
 def _lazy(d, chunks):

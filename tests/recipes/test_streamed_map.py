@@ -4,8 +4,6 @@ and odd synthetic grids; the PNG's blocks, the thread rule, the fall-backs, and 
 
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -19,18 +17,13 @@ from sciviz_gbuf.readers import read_dem
 from sciviz_gbuf.recipes import terrain
 from sciviz_gbuf.recipes.terrain import topographic_map, write_topographic_png
 from sciviz_gbuf.writers.png import encode_png_rows, write_png_blocks
-from tests.helpers.paths import SHARED_DATA
+from tests.helpers.paths import SHARED_DATA, shared_dem
 
 DATA = SHARED_DATA / "dem"
 
 
 def _dem(name: str):
-    path = DATA / name
-    if not path.is_file():
-        pytest.skip(f"{path} not available")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UserWarning)  # the SRTM .asc has no CRS
-        return read_dem(path)
+    return shared_dem(name)
 
 
 def _png(path) -> np.ndarray:
