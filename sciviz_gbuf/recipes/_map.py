@@ -33,6 +33,7 @@ __all__ = [
     "check_line_sizes",
     "check_z_factor",
     "composite",
+    "grid_z_factor",
     "lazy_dem",
     "lit",
     "map_band_heights",
@@ -81,6 +82,17 @@ def relief_z_factor(z_factor: float | None, ground_slope: float) -> float:
         return 1.0
     target = math.tan(math.radians(RELIEF_SLOPE))
     return float(min(max(target / ground_slope, 1.0), RELIEF_Z_MAX))
+
+
+def grid_z_factor(z: np.ndarray, z_factor: float | None, dx: float, dy: float) -> float:
+    """The relief's z factor of in-memory heights ``z``: ``z_factor``, or with None
+    :func:`relief_z_factor` of the median ground slope on the cells ``dx`` by ``dy`` of
+    :func:`~._intervals.slope_lattice`."""
+    if z_factor is not None:
+        return z_factor
+    lattice = slope_lattice(z)
+    slope = float("nan") if lattice is None else median_ground_slope(*lattice, dx, dy)
+    return relief_z_factor(None, slope)
 
 
 def check_z_factor(z_factor) -> float | None:
@@ -206,10 +218,7 @@ def map_layers(
     if bar is not None:
         bar.step("relief")
     if relief:
-        if z_factor is None:
-            lattice = slope_lattice(z)
-            slope = float("nan") if lattice is None else median_ground_slope(*lattice, dx, dy)
-            z_factor = relief_z_factor(None, slope)
+        z_factor = grid_z_factor(z, z_factor, dx, dy)
         layers["z_factor"] = z_factor
         opts = {"azimuth": azimuth, "altitude": altitude, "z_factor": z_factor, "variant": variant}
         layers["sh"] = relief_shade(z, style, dx=dx, dy=dy, **opts)

@@ -24,14 +24,11 @@ from .. import _dask, _validate
 from .._progress import progress
 from ..core.bands import on_this_thread, threads
 from ..errors import InputError
-from ..filters import hillshade
 from ..readers import DEM
 from ..writers.png import LARGE_IMAGE, encode_png_rows, write_png, write_png_blocks
 from ._intervals import (
     contour_intervals,
-    median_ground_slope,
     nice_intervals,
-    slope_lattice,
     typical_slope,
 )
 from ._map import (
@@ -40,15 +37,15 @@ from ._map import (
     check_line_sizes,
     check_z_factor,
     composite,
+    grid_z_factor,
     map_band_tables,
     map_layers,
     map_min_ring,
-    relief_z_factor,
 )
-from ._relief import RELIEFS, relief_flat, relief_reach, relief_style
+from ._relief import RELIEFS, relief_reach, relief_style
 from ._resample import check_size_options, map_grid, resample_heights
 from .labels import check_in_memory, draw_labels, label_boxes, label_options, labels_of_grid
-from .terrain_chunked import RELIEF_HALO, lazy_topographic_map, window_map
+from .terrain_chunked import RELIEF_HALO, lazy_topographic_map, map_parts, window_map
 
 __all__ = [
     "CONTOUR_COLOR",
@@ -397,27 +394,14 @@ def _map_block(d: DEM, colour: np.ndarray, options: dict) -> tuple[Callable, int
     vmin, vmax = o["vmin"], o["vmax"]
     tables = map_band_tables(o["bands"], interval, major, o["cmap"], lo if vmin is None else vmin,
                              hi if vmax is None else vmax, o["sea_level"])  # fmt: skip
-    lines = {"interval": interval, "major_interval": major, "width": o["width"],
-             "major_width": o["major_width"]}  # fmt: skip
-    ink = {**lines, "dense_spacing": o["dense_spacing"], "generalize": o["generalize"]}
-    light = None
-    flat = 1.0
-    halo = RELIEF_HALO
-    if style is not None:
-        z_factor = o["z_factor"]
-        if z_factor is None:
-            lattice = slope_lattice(z)
-            slope = float("nan") if lattice is None else median_ground_slope(*lattice, dx, dy)
-            z_factor = relief_z_factor(None, slope)
-        light = {"azimuth": o["azimuth"], "altitude": o["altitude"], "z_factor": z_factor,
-                 "variant": o["variant"]}  # fmt: skip
-        hillshade(np.zeros((3, 3), np.float32), dx=dx, dy=dy, **light)  # checks now
-        flat = relief_flat(style, dx=dx, dy=dy, **light)
-        light["style"] = style
-        halo += relief_reach(style, dx, dy)
-    bands = None
-    if o["generalize"] and tables is not None:
-        bands = {**lines, "bands": o["bands"]}
+    z_factor = None if style is None else grid_z_factor(z, o["z_factor"], dx, dy)
+    ink, light, flat, bands = map_parts(
+        style, tables, dx, dy, interval=interval, major_interval=major, width=o["width"],
+        major_width=o["major_width"], dense_spacing=o["dense_spacing"],
+        generalize=o["generalize"], bands=o["bands"], azimuth=o["azimuth"],
+        altitude=o["altitude"], z_factor=z_factor, variant=o["variant"],
+    )  # fmt: skip
+    halo = RELIEF_HALO + (relief_reach(style, dx, dy) if style is not None else 0)
     return window_map(colour, tables, ink if o["contours"] else None, light,
                       bool(o["sky_view"]) and light is not None, dx, dy, flat, bands,
                       halo)  # fmt: skip

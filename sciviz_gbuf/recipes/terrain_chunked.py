@@ -37,7 +37,7 @@ from ._map import (
 )
 from ._relief import relief_flat, relief_reach, relief_shade, relief_style
 
-__all__ = ["RELIEF_HALO", "lazy_topographic_map", "window_map"]
+__all__ = ["RELIEF_HALO", "lazy_topographic_map", "map_parts", "window_map"]
 
 #: Stencil radius of a map's relief: GDAL's 3x3 window on the grid whose nodata ring is
 #: extrapolated from up to 2 cells further.
@@ -130,28 +130,14 @@ def lazy_topographic_map(
         bands, interval, major_interval, cmap, lo if vmin is None else vmin,
         hi if vmax is None else vmax, sea_level,
     )  # fmt: skip
-    flat = 1.0
-    light = {"azimuth": azimuth, "altitude": altitude, "z_factor": z_factor, "variant": variant}
-    if relief:
-        hillshade(np.zeros((3, 3), np.float32), dx=dx, dy=dy, **light)  # checks now
-        flat = relief_flat(style, dx=dx, dy=dy, **light)
-        light["style"] = style
-    # generalised maps colour their bands by the heights their lines are drawn from
-    band_options = None
-    if generalize and tables is not None:
-        band_options = {"bands": bands, "interval": interval, "major_interval": major_interval,
-                        "width": width, "major_width": major_width}  # fmt: skip
+    ink_options, light, flat, band_options = map_parts(
+        style, tables, dx, dy, interval=interval, major_interval=major_interval, width=width,
+        major_width=major_width, dense_spacing=dense_spacing, generalize=generalize,
+        bands=bands, azimuth=azimuth, altitude=altitude, z_factor=z_factor, variant=variant,
+    )  # fmt: skip
     if _chunks.windows_of(z) is not None:
-        ink_options = {
-            "interval": interval,
-            "major_interval": major_interval,
-            "width": width,
-            "major_width": major_width,
-            "dense_spacing": dense_spacing,
-            "generalize": generalize,
-        }
         return _windowed_map(
-            z, colour, tables, ink_options if contours else None, light if relief else None,
+            z, colour, tables, ink_options if contours else None, light,
             sky_view and relief, dx, dy, flat, band_options, relief_halo,
         )  # fmt: skip
     layers: dict[str, object] = {}
@@ -160,15 +146,7 @@ def lazy_topographic_map(
         if band_z is not None:
             layers["band_z"] = band_z
     if contours:
-        layers["ink"] = map_contours(
-            z,
-            interval=interval,
-            major_interval=major_interval,
-            width=width,
-            major_width=major_width,
-            dense_spacing=dense_spacing,
-            generalize=generalize,
-        )
+        layers["ink"] = map_contours(z, **ink_options)
     if relief:
         layers["sh"] = _chunks.map_stencil(
             _relief_block,
@@ -200,6 +178,31 @@ def lazy_topographic_map(
         dtype=np.uint8,
         meta=np.empty((0, 0, 0), np.uint8),
     )
+
+
+def map_parts(
+    style: str | None, tables, dx: float, dy: float, *, interval, major_interval, width,
+    major_width, dense_spacing, generalize, bands, azimuth, altitude, z_factor, variant,
+) -> tuple[dict, dict | None, float, dict | None]:  # fmt: skip
+    """``(ink options, light, flat, band options)`` of a map whose whole-grid numbers are
+    known (``interval``/``major_interval`` chosen, ``tables`` made, ``z_factor`` a number):
+    what the chunked and the streamed maps give :func:`window_map`. ``light`` (with the
+    style) and the shade of flat ground only with a relief ``style`` (checked now: None and
+    1 without); band options only for a generalised map with bands."""
+    lines = {"interval": interval, "major_interval": major_interval, "width": width,
+             "major_width": major_width}  # fmt: skip
+    ink = {**lines, "dense_spacing": dense_spacing, "generalize": generalize}
+    light = None
+    flat = 1.0
+    if style is not None:
+        light = {"azimuth": azimuth, "altitude": altitude, "z_factor": z_factor,
+                 "variant": variant}  # fmt: skip
+        hillshade(np.zeros((3, 3), np.float32), dx=dx, dy=dy, **light)  # checks now
+        flat = relief_flat(style, dx=dx, dy=dy, **light)
+        light["style"] = style
+    # generalised maps colour their bands by the heights their lines are drawn from
+    band_options = {**lines, "bands": bands} if generalize and tables is not None else None
+    return ink, light, flat, band_options
 
 
 def _band_z(z, band_options: dict):
