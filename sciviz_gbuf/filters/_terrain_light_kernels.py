@@ -564,6 +564,25 @@ def _step_lerp_max(
 
 
 @njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _steps_in(h: int, w: int, d_row: float, d_col: float, n_in: np.ndarray) -> None:
+    """``n_in[j]``: the steps the ray of a cell of column ``j`` takes inside the grid across
+    the rows' axis (the same formula, and rounding, as the march): a row march's bound of
+    each column, the same for every row, so taken once per direction."""
+    if abs(d_row) == 1.0:
+        for j in range(w):
+            if d_col > 0.0:
+                n_in[j] = int((w - 1 - j) / d_col + 1e-9)
+            elif d_col < 0.0:
+                n_in[j] = int(j / -d_col + 1e-9)
+            else:
+                n_in[j] = h + w
+    else:
+        dj = int(d_col)
+        for j in range(w):
+            n_in[j] = w - 1 - j if dj > 0 else j
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
 def _horizon_row(
     z: np.ndarray,
     i: int,
@@ -581,8 +600,8 @@ def _horizon_row(
 ) -> None:
     """``best[j]``: the largest ``(sample - z[i, j]) / distance`` along the ray of every cell
     of row ``i`` in one direction (at least ``floor_tan``), as :func:`_horizon_tan` marches it:
-    the same samples, steps and grid-edge rule; nodata samples never raise it. ``n_in`` is
-    scratch of the row's length."""
+    the same samples, steps and grid-edge rule; nodata samples never raise it. ``n_in``: the
+    direction's :func:`_steps_in`."""
     h, w = z.shape
     zi = z[i]
     f0 = np.float32(floor_tan)
@@ -590,17 +609,10 @@ def _horizon_row(
         best[j] = f0
     rows_major = abs(d_row) == 1.0
     # steps each cell's ray takes inside the grid: along the major axis one bound for the
-    # row, along the minor axis one per cell (the same formula, and rounding, as the march)
+    # row, along the minor axis one per cell (n_in, :func:`_steps_in`)
     if rows_major:
         di = int(d_row)
         n_row = h - 1 - i if di > 0 else i
-        for j in range(w):
-            if d_col > 0.0:
-                n_in[j] = int((w - 1 - j) / d_col + 1e-9)
-            elif d_col < 0.0:
-                n_in[j] = int(j / -d_col + 1e-9)
-            else:
-                n_in[j] = h + w
     else:
         dj = int(d_col)
         if d_row > 0.0:
@@ -609,8 +621,6 @@ def _horizon_row(
             n_row = int(i / -d_row + 1e-9)
         else:
             n_row = h + w
-        for j in range(w):
-            n_in[j] = w - 1 - j if dj > 0 else j
     n_k = min(n_row, max_steps)
     far = n_k * step_len
     for k in range(1, n_k + 1):
@@ -708,7 +718,8 @@ def _row_march(z: np.ndarray, rays: tuple, mode: int) -> np.ndarray:
     run_bands(
         _sky_rows, h, z, d_rows, d_cols, step_lens, row_ubs, col_ubs, row_which, col_which,
         max_steps, mode, out,
-        scratch=lambda: (np.empty(w, np.float32), np.empty(w, np.int64), np.empty(w)),
+        scratch=lambda: (np.empty(w, np.float32), np.empty((len(d_rows), w), np.int64),
+                         np.empty(w)),
     )  # fmt: skip
     return out
 
@@ -751,13 +762,16 @@ def _sky_rows(
     n = d_rows.shape[0]
     floor_tan = 0.0 if mode == 0 else -np.inf
     deg = np.float32(180.0 / math.pi)
+    h = z.shape[0]
+    for d in range(n):
+        _steps_in(h, w, d_rows[d], d_cols[d], n_in[d])
     for i in range(i0, i1):
         for j in range(w):
             acc[j] = 0.0
         for d in range(n):
             _horizon_row(z, i, d_rows[d], d_cols[d], step_lens[d], max_steps[d], row_ubs,
                          row_which[d], col_ubs, col_which[d], floor_tan, best,
-                         n_in)  # fmt: skip
+                         n_in[d])  # fmt: skip
             if mode == 0:
                 for j in range(w):
                     t = best[j]
