@@ -205,13 +205,15 @@ def smooth_strip(
     h, w = z.shape
     r0, r1, c0, c1 = (0, h, 0, w) if inner is None else inner
     rows = (r0, r1) if serial and inner is not None else None
+    cols = (c0, c1) if serial and inner is not None else None
     widest = SIGMA_MAX
     for k, s in enumerate(SIGMAS[1:]):
         if s > SIGMA_SLOPE and SIGMAS[k] >= widest:
             break  # no cell of the strip asks for this width (its fit would not be read)
         g, gd, gdd = _kernels(s)
         _sk.local_linear_kernel(z64, valid, g, gd, gdd, s, out=fits[3 * k : 3 * k + 3],
-                                work=work[nfit * n :], serial=serial, rows=rows)  # fmt: skip
+                                work=work[nfit * n :], serial=serial, rows=rows,
+                                cols=cols)  # fmt: skip
         if s == SIGMA_SLOPE:
             widest = _widest_sigma(fits[3 * k + 1, r0:r1, c0:c1], fits[3 * k + 2, r0:r1, c0:c1],
                                    valid[r0:r1, c0:c1], interval)  # fmt: skip

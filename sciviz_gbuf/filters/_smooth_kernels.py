@@ -27,6 +27,7 @@ def local_linear_kernel(
     z: np.ndarray, valid: np.ndarray, g: np.ndarray, gd: np.ndarray, gdd: np.ndarray,
     sigma: float, out: np.ndarray | None = None, work: np.ndarray | None = None,
     serial: bool = False, rows: tuple[int, int] | None = None,
+    cols: tuple[int, int] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
     """``(a, b, c)`` float64: at each cell the least-squares plane ``a + b dx + c dy`` of the
     valid cells around it, weighted ``g(dx) g(dy)`` (taps ``g``, ``g d``, ``g d^2`` of one
@@ -36,7 +37,7 @@ def local_linear_kernel(
     fits strip after strip reuses its memory: fresh memory costs more to touch than the
     sums); ``serial``: on the calling thread only (for a caller that runs tiles on threads);
     ``rows``: with ``serial``, the rows ``(r0, r1)`` to fit (the others are read, not fitted:
-    ``a``, ``b``, ``c`` hold no values there).
+    ``a``, ``b``, ``c`` hold no values there); ``cols``: likewise the columns ``(c0, c1)``.
 
     The six moments of the valid mask are the same at every cell whose whole window is valid
     and inside the grid (most of a DEM): there they are computed once, from a row of ones by
@@ -50,7 +51,8 @@ def local_linear_kernel(
     # the mask moments of a row of ones (x-passes) and of a full window (y-passes)
     full_x = np.empty((5, 1, w), np.float64)
     _x_rows(0, 1, np.zeros((1, w)), np.ones((1, w), np.bool_), g, gd, gdd, full_x,
-            np.zeros((3, w)), np.zeros(1, np.bool_), np.empty(w), np.empty(w))  # fmt: skip
+            np.zeros((3, w)), np.zeros(1, np.bool_), 0, w, np.empty(w),
+            np.empty(w + 2 * r))  # fmt: skip
     full_y = np.zeros(6, np.float64)
     if w > 2 * r:
         # the y-sums of _v_taps over a full window, in its order (IEEE sums: the same bits)
@@ -69,12 +71,14 @@ def local_linear_kernel(
         work = np.empty(5 * h * w, np.float64)
     xs = work[: 5 * h * w].reshape(5, h, w)
     bands = _serial if serial else run_bands
-    bands(_x_rows, h, zc, vc, g, gd, gdd, xs, full_x[:3, 0], row_ok,
-          scratch=lambda: (np.empty(w), np.empty(w)))  # fmt: skip
+    # the x-passes of the fitted columns only: the y-passes read no others
+    c0, c1 = (0, w) if cols is None or not serial else cols
+    bands(_x_rows, h, zc, vc, g, gd, gdd, xs, full_x[:3, 0], row_ok, c0, c1,
+          scratch=lambda: (np.empty(w), np.empty(w + 2 * r)))  # fmt: skip
     if out is None:
         out = np.empty((3, h, w), np.float64)
     a, b, c = out[0], out[1], out[2]
-    y_args = (xs, vc, g, gd, gdd, float(sigma), full_y, a, b, c)
+    y_args = (xs, vc, g, gd, gdd, float(sigma), full_y, a, b, c, c0, c1)
     if rows is not None and serial:
         _y_rows(rows[0], rows[1], *y_args, np.empty((9, w)), np.empty(w, np.int32),
                 np.empty(w + 1, np.int32))  # fmt: skip
@@ -112,42 +116,74 @@ def _taps2(o0: np.ndarray, o1: np.ndarray, x: np.ndarray, w0: float, w1: float) 
 
 
 @njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _taps2x4(
+    o0: np.ndarray, o1: np.ndarray, x0: np.ndarray, x1: np.ndarray, x2: np.ndarray,
+    x3: np.ndarray, g0: float, g1: float, g2: float, g3: float, d0: float, d1: float,
+    d2: float, d3: float,
+) -> None:  # fmt: skip
+    """Four x-taps at once: ``o0 += g x``, ``o1 += d x`` for the shifted rows ``x0..x3``,
+    added one tap after the other as four calls of one tap would (the same bits, a quarter
+    of the loads and stores of the sums)."""
+    for j in range(o0.shape[0]):
+        o0[j] = (((o0[j] + g0 * x0[j]) + g1 * x1[j]) + g2 * x2[j]) + g3 * x3[j]
+        o1[j] = (((o1[j] + d0 * x0[j]) + d1 * x1[j]) + d2 * x2[j]) + d3 * x3[j]
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
 def _x_rows(
     i0: int, i1: int, z: np.ndarray, valid: np.ndarray, g: np.ndarray, gd: np.ndarray,
-    gdd: np.ndarray, xs: np.ndarray, full: np.ndarray, row_ok: np.ndarray, v: np.ndarray,
-    vz: np.ndarray,
+    gdd: np.ndarray, xs: np.ndarray, full: np.ndarray, row_ok: np.ndarray, c0: int, c1: int,
+    v: np.ndarray, vzp: np.ndarray,
 ) -> None:  # fmt: skip
-    """Rows ``i0 .. i1`` of the x-passes: ``xs[0..2]`` of ``v`` with ``g``, ``g d``,
-    ``g d^2``; ``xs[3..4]`` of ``v z`` with ``g``, ``g d``. A row without nodata
-    (``row_ok``) copies ``xs[0..2]`` from ``full``, the same sums of a row of ones."""
+    """Rows ``i0 .. i1``, columns ``c0 .. c1`` of the x-passes: ``xs[0..2]`` of ``v`` with
+    ``g``, ``g d``, ``g d^2``; ``xs[3..4]`` of ``v z`` with ``g``, ``g d``. A row without nodata
+    (``row_ok``) copies ``xs[0..2]`` from ``full``, the same sums of a row of ones.
+
+    ``vzp``: scratch of ``W + 2 r`` for ``v z`` with ``r`` zeros on each side, so every tap
+    reads the whole row. A tap outside the grid then adds ``+-0.0``, which leaves a sum that
+    started at ``+0.0`` as it is (such a sum is never ``-0.0``): the same bits as skipping
+    the tap, and the taps run four at a time in one vector loop."""
     w = z.shape[1]
     r = g.shape[0] // 2
+    n = c1 - c0
+    for q in range(r):
+        vzp[q] = 0.0
+        vzp[r + w + q] = 0.0
     for i in range(i0, i1):
         ok_row = row_ok[i]
         for j in range(w):
             ok = valid[i, j]
             v[j] = 1.0 if ok else 0.0
-            vz[j] = z[i, j] if ok else 0.0
+            vzp[r + j] = z[i, j] if ok else 0.0
+        for j in range(c0, c1):
             xs[3, i, j] = 0.0
             xs[4, i, j] = 0.0
         if ok_row:
             for f in range(3):
-                for j in range(w):
+                for j in range(c0, c1):
                     xs[f, i, j] = full[f, j]
         else:
             for f in range(3):
-                for j in range(w):
+                for j in range(c0, c1):
                     xs[f, i, j] = 0.0
-        for t in range(2 * r + 1):
-            off = t - r
-            lo = max(0, -off)
-            hi = min(w, w - off)
-            if lo >= hi:
-                continue
-            if not ok_row:
-                _taps3(xs[0, i, lo:hi], xs[1, i, lo:hi], xs[2, i, lo:hi],
-                       v[lo + off : hi + off], g[t], gd[t], gdd[t])  # fmt: skip
-            _taps2(xs[3, i, lo:hi], xs[4, i, lo:hi], vz[lo + off : hi + off], g[t], gd[t])
+            for t in range(2 * r + 1):
+                off = t - r
+                lo = max(c0, -off)
+                hi = min(c1, w - off)
+                if lo < hi:
+                    _taps3(xs[0, i, lo:hi], xs[1, i, lo:hi], xs[2, i, lo:hi],
+                           v[lo + off : hi + off], g[t], gd[t], gdd[t])  # fmt: skip
+        t = 0
+        while t < 2 * r + 1:
+            x = t + c0
+            if t + 3 < 2 * r + 1:
+                _taps2x4(xs[3, i, c0:c1], xs[4, i, c0:c1], vzp[x : x + n], vzp[x + 1 : x + 1 + n],
+                         vzp[x + 2 : x + 2 + n], vzp[x + 3 : x + 3 + n], g[t], g[t + 1],
+                         g[t + 2], g[t + 3], gd[t], gd[t + 1], gd[t + 2], gd[t + 3])  # fmt: skip
+                t += 4
+            else:
+                _taps2(xs[3, i, c0:c1], xs[4, i, c0:c1], vzp[x : x + n], g[t], gd[t])
+                t += 1
 
 
 @njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
@@ -186,9 +222,10 @@ def _v_taps(acc: np.ndarray, xs: np.ndarray, i: int, g: np.ndarray, gd: np.ndarr
 def _y_rows(
     i0: int, i1: int, xs: np.ndarray, valid: np.ndarray, g: np.ndarray, gd: np.ndarray,
     gdd: np.ndarray, sigma: float, full: np.ndarray, a: np.ndarray, b: np.ndarray,
-    c: np.ndarray, acc: np.ndarray, bad: np.ndarray, run: np.ndarray,
+    c: np.ndarray, c0: int, c1: int, acc: np.ndarray, bad: np.ndarray, run: np.ndarray,
 ) -> None:  # fmt: skip
-    """Rows ``i0 .. i1`` of the y-passes of the moments and the plane's solution.
+    """Rows ``i0 .. i1``, columns ``c0 .. c1`` of the y-passes of the moments and the plane's
+    solution.
 
     ``bad[j]``: the cells of column ``j`` in the row's window that are nodata or outside the
     grid (kept row to row); a cell with no such cell within ``r`` columns (and ``r`` cells
@@ -213,7 +250,7 @@ def _y_rows(
         for j in range(w):
             run[j + 1] = run[j] + (1 if bad[j] > 0 else 0)
         for f in range(6, 9):
-            for j in range(w):
+            for j in range(c0, c1):
                 acc[f, j] = 0.0
         # mz, myz, mxz: four taps a pass where four rows are in the grid (each sum still
         # taken tap by tap in order, so the same bits; a quarter of the loads and stores)
@@ -223,24 +260,25 @@ def _y_rows(
             if row < 0 or row >= h:
                 t += 1
             elif t + 3 < 2 * r + 1 and row + 3 < h:
-                _ztaps4(acc[6], acc[7], acc[8], xs[3, row], xs[3, row + 1], xs[3, row + 2],
-                        xs[3, row + 3], xs[4, row], xs[4, row + 1], xs[4, row + 2],
-                        xs[4, row + 3], g[t], g[t + 1], g[t + 2], g[t + 3], gd[t], gd[t + 1],
-                        gd[t + 2], gd[t + 3])  # fmt: skip
+                _ztaps4(acc[6, c0:c1], acc[7, c0:c1], acc[8, c0:c1], xs[3, row, c0:c1],
+                        xs[3, row + 1, c0:c1], xs[3, row + 2, c0:c1], xs[3, row + 3, c0:c1],
+                        xs[4, row, c0:c1], xs[4, row + 1, c0:c1], xs[4, row + 2, c0:c1],
+                        xs[4, row + 3, c0:c1], g[t], g[t + 1], g[t + 2], g[t + 3], gd[t],
+                        gd[t + 1], gd[t + 2], gd[t + 3])  # fmt: skip
                 t += 4
             else:
-                _taps2(acc[6], acc[7], xs[3, row], g[t], gd[t])
-                _taps1(acc[8], xs[4, row], g[t])
+                _taps2(acc[6, c0:c1], acc[7, c0:c1], xs[3, row, c0:c1], g[t], gd[t])
+                _taps1(acc[8, c0:c1], xs[4, row, c0:c1], g[t])
                 t += 1
         # the mask moments: constants where the window is full, summed over runs elsewhere;
         # a full window's system is the same at every cell, so its cofactors are taken once
-        j = 0
-        while j < w:
+        j = c0
+        while j < c1:
             jl = max(j - r, 0)
             jh = min(j + r + 1, w)
             full_here = j >= r and j < w - r and run[jh] - run[jl] == 0
             k = j + 1
-            while k < w:
+            while k < c1:
                 kl = max(k - r, 0)
                 kh = min(k + r + 1, w)
                 if (k >= r and k < w - r and run[kh] - run[kl] == 0) != full_here:
@@ -321,18 +359,89 @@ def _lerp_fit(s: float, f0: float, f1: float, f2: float, f3: float) -> float:
     return f0
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def _neighbour(zn: float, zc: float, k: float, lo: float, hi: float, zmax: float,
+               zmin: float) -> tuple:  # fmt: skip
+    """One neighbour ``zn`` of :func:`_blend_rows`' loop: the band ``(lo, hi)`` widened to the
+    interpolant ``k`` of the way towards it, the 3 x 3 range ``(zmax, zmin)`` to it."""
+    step = zn - zc
+    t = zc + k * step
+    if np.isfinite(step):
+        lo = min(lo, t)
+        hi = max(hi, t)
+    return lo, hi, max(zmax, zn), min(zmin, zn)
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _blend_full(
+    up: np.ndarray, mid: np.ndarray, down: np.ndarray, a1: np.ndarray, b1s: np.ndarray,
+    c1s: np.ndarray, a2: np.ndarray, b2: np.ndarray, c2: np.ndarray, a4: np.ndarray,
+    b4: np.ndarray, c4: np.ndarray, interval: float, per_px: float, steep: float,
+    sigma_max: float, sigma_grad: float, k_axis: float, k_diag: float, out: np.ndarray,
+    grad: np.ndarray,
+) -> None:  # fmt: skip
+    """:func:`_blend_rows` of a run of cells whose 3 x 3 neighbours are all valid (rows
+    ``up``, ``mid``, ``down`` one cell wider on each side; the fits' rows ``a1 .. c4``): the
+    same operations in the same order, the neighbours written out."""
+    for q in range(out.shape[0]):
+        zc = mid[q + 1]
+        b1 = b1s[q]
+        c1 = c1s[q]
+        g = np.sqrt(b1 * b1 + c1 * c1)
+        spacing = interval / g if g > 0.0 else np.inf
+        sigma = min(max(per_px * (spacing - steep), 0.0), sigma_max)
+        sg = max(sigma, sigma_grad)
+        v = _lerp_fit(sigma, zc, a1[q], a2[q], a4[q])
+        gx = _lerp_fit(sg, 0.0, b1, b2[q], b4[q])
+        gy = _lerp_fit(sg, 0.0, c1, c2[q], c4[q])
+        lo = zc
+        hi = zc
+        zmax = zc
+        zmin = zc
+        # the neighbours in _blend_rows' order: rows -1, 0, 1, columns -1, 0, 1
+        lo, hi, zmax, zmin = _neighbour(up[q], zc, k_diag, lo, hi, zmax, zmin)
+        lo, hi, zmax, zmin = _neighbour(up[q + 1], zc, k_axis, lo, hi, zmax, zmin)
+        lo, hi, zmax, zmin = _neighbour(up[q + 2], zc, k_diag, lo, hi, zmax, zmin)
+        lo, hi, zmax, zmin = _neighbour(mid[q], zc, k_axis, lo, hi, zmax, zmin)
+        lo, hi, zmax, zmin = _neighbour(mid[q + 2], zc, k_axis, lo, hi, zmax, zmin)
+        lo, hi, zmax, zmin = _neighbour(down[q], zc, k_diag, lo, hi, zmax, zmin)
+        lo, hi, zmax, zmin = _neighbour(down[q + 1], zc, k_axis, lo, hi, zmax, zmin)
+        lo, hi, zmax, zmin = _neighbour(down[q + 2], zc, k_diag, lo, hi, zmax, zmin)
+        v = min(max(v, lo), hi)
+        out[q] = np.float32(v)
+        grad[q] = np.float32(0.0) if zmax == zmin else np.float32(np.sqrt(gx * gx + gy * gy))
+
+
 @njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
 def _blend_rows(
     i0: int, i1: int, z: np.ndarray, valid: np.ndarray, fits: np.ndarray, interval: float,
     per_px: float, steep: float, sigma_max: float, sigma_grad: float, k_axis: float,
     k_diag: float, r0: int, c0: int, c1: int, out: np.ndarray, grad: np.ndarray,
+    row_ok: np.ndarray,
 ) -> None:  # fmt: skip
     """Rows ``r0 + i0 .. r0 + i1``, columns ``c0 .. c1`` of :func:`blend_kernel`, cell
     ``(i, j)`` into ``out[i - r0, j - c0]`` and ``grad[i - r0, j - c0]``."""
     h, w = z.shape
     nan = np.float32(np.nan)
     for i in range(r0 + i0, r0 + i1):
+        # rows whose 3 x 3 windows are all valid and inside the grid: the same operations
+        # in a loop without branches on the neighbours, which LLVM vectorises
+        fa, fb = c0, c0
+        if 0 < i < h - 1 and row_ok[i - 1] and row_ok[i] and row_ok[i + 1]:
+            fa, fb = max(c0, 1), min(c1, w - 1)
+            if fa < fb:
+                _blend_full(z[i - 1, fa - 1 : fb + 1], z[i, fa - 1 : fb + 1],
+                            z[i + 1, fa - 1 : fb + 1], fits[0, i, fa:fb], fits[1, i, fa:fb],
+                            fits[2, i, fa:fb], fits[3, i, fa:fb], fits[4, i, fa:fb],
+                            fits[5, i, fa:fb], fits[6, i, fa:fb], fits[7, i, fa:fb],
+                            fits[8, i, fa:fb], interval, per_px, steep, sigma_max, sigma_grad,
+                            k_axis, k_diag, out[i - r0, fa - c0 : fb - c0],
+                            grad[i - r0, fa - c0 : fb - c0])  # fmt: skip
+            else:
+                fa, fb = c0, c0
         for j in range(c0, c1):
+            if fa <= j < fb:
+                continue
             if not valid[i, j]:
                 out[i - r0, j - c0] = nan
                 grad[i - r0, j - c0] = nan
@@ -405,7 +514,8 @@ def blend_kernel(
     bands = _serial if serial else run_bands
     bands(_blend_rows, r1 - r0, zc, vc, np.ascontiguousarray(fits), float(interval),
           float(per_px), float(steep), float(sigma_max), float(sigma_grad), float(displace),
-          float(displace / np.sqrt(2.0)), r0, c0, c1, out, grad)  # fmt: skip
+          float(displace / np.sqrt(2.0)), r0, c0, c1, out, grad,
+          np.ascontiguousarray(vc.all(axis=1)))  # fmt: skip
     return out, grad
 
 
