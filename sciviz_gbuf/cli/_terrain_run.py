@@ -13,7 +13,7 @@ from .._progress import progress
 from ..apps.warmup import preload_map
 from ..apps.warmup import start as start_warmup
 from ..apps.warmup import stop as stop_warmup
-from ..compose import write_geotiff, write_png
+from ..compose import write_png
 from ..errors import InputError
 from ..readers import read_dem
 from ..recipes.labels import contour_labels, label_options, labels_to_geojson
@@ -239,13 +239,16 @@ def _topo_in_memory(
         dem = _read_terrain(source, args.geographic)
         loader.join()
         bar.step("map")
-        if not tif and args.geotiff is None and not args.labels:
-            # mapped and written block by block (the same pixels, mapping and deflating at once)
+        if not tif and not args.labels:
+            # mapped and written block by block (the same pixels, mapping and deflating at once;
+            # a --geotiff COG from the same blocks)
             opts = _topo_options(args, show)
             for key in ("progress_bar", "dpi"):
                 opts.pop(key, None)
-            h, w = write_topographic_png(out, dem, **opts, dpi=args.dpi)
+            h, w = write_topographic_png(out, dem, **opts, dpi=args.dpi, geotiff=args.geotiff)
             bar.step("write")
+            if args.geotiff is not None:
+                bar.step("geotiff")
             if args.labels_geojson is not None:
                 _write_labels_geojson(args, dem)
             print(f"wrote {out}{_also(args)} ({w}x{h}) in {time.perf_counter() - t0:.1f} s")
@@ -260,7 +263,7 @@ def _topo_in_memory(
             write_png(out, rgba, dpi=args.dpi)
         if args.geotiff is not None:
             # an image of another size than the DEM covers its extent: the transform follows
-            write_geotiff(args.geotiff, rgba, dem=dem)
+            write_cog(rgba, args.geotiff, dem=dem)
             bar.step("geotiff")
         if args.labels_geojson is not None:
             _write_labels_geojson(args, dem)

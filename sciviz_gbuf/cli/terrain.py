@@ -294,8 +294,8 @@ def add_topo(sub) -> None:
         "--geotiff",
         default=None,
         metavar="FILE.tif",
-        help="also write an RGBA GeoTIFF with the DEM's CRS and transform (its pixel size "
-        "that of the map: --size/--scale)",
+        help="also write the map as an RGBA Cloud-Optimised GeoTIFF with the DEM's CRS and "
+        "transform (its pixel size that of the map: --size/--scale)",
     )
     _add_size_options(p, plan_view=True)
     p.add_argument(

@@ -25,6 +25,7 @@ from .._progress import progress
 from ..core.bands import on_this_thread, threads
 from ..errors import InputError
 from ..readers import DEM
+from ..writers.cog import BLOCK, check_cog_target, cog_target, write_cog
 from ..writers.png import LARGE_IMAGE, encode_png_rows, write_png, write_png_blocks
 from ._intervals import (
     contour_intervals,
@@ -305,9 +306,11 @@ def write_topographic_png(
     size: int | Sequence[int] | None = None,
     scale: float | str | None = None,
     dpi: float | None = None,
+    geotiff: str | os.PathLike | None = None,
 ) -> tuple[int, int]:
     """Write :func:`topographic_map` of a DEM as a PNG, block of rows by block of rows as
-    they are mapped: the same pixels, the whole map never in memory.
+    they are mapped: the same pixels, the whole map never in memory; with ``geotiff``, the
+    same map as a Cloud-Optimised GeoTIFF too, from the same blocks.
 
     The in-memory map makes each layer of the whole grid (relief, contour ink, band
     heights) and then the RGBA image, one after the other, and only then deflates it. Here
@@ -334,6 +337,13 @@ def write_topographic_png(
     variant, shadows, sky_view, size, scale, dpi
         As :func:`topographic_map`; ``dpi`` is recorded in the PNG (and with ``scale``
         sizes the map, as there).
+    geotiff : str or path-like, optional
+        Also write the map as a georeferenced COG (``.tif``): the DEM's CRS, the map's pixel
+        size, the layout of :func:`~sciviz_gbuf.writers.cog.write_cog` (512-pixel tiles,
+        overviews), the same bytes as ``write_cog(topographic_map(...), dem=...)``. A
+        streamed map's blocks are then whole rows of tiles, and each block's tiles are
+        deflated where the block is mapped. Checked before any mapping; written atomically
+        after the PNG.
 
     Returns
     -------
@@ -361,24 +371,42 @@ def write_topographic_png(
     style = relief_style(relief)
     d, options = _map_dem(dem, **opts, z_factor=z_factor, size=size, scale=scale, dpi=map_dpi)
     h, w = d.shape
+    if geotiff is not None:
+        check_cog_target(geotiff, d)  # before any mapping
     whole = shadows or style in ("texture", "local_relief") or _dask.is_dask(d.heights)
     if whole or h * w < LARGE_IMAGE:
         image = topographic_map(d, contour_color=contour_color, **opts, z_factor=z_factor)
         write_png(path, image, dpi=dpi)
+        if geotiff is not None:
+            write_cog(image, geotiff, dem=d)
         return image.shape[0], image.shape[1]
     block, halo = _map_block(d, colour, options)
     rows = max(STREAM_ROWS, STREAM_HALOS * halo)
+    if geotiff is not None:
+        rows = -(-rows // BLOCK) * BLOCK  # whole rows of COG tiles in every block
     starts = range(0, h, rows)
     z = d.heights
 
-    def encode(r0: int) -> tuple[bytes, int, int]:
+    def mapped(r0: int) -> np.ndarray:
         r1 = min(r0 + rows, h)
         a0, a1 = max(0, r0 - halo), min(h, r1 + halo)
         with on_this_thread():  # the other cores map other blocks
-            rgba = block(z[a0:a1], (slice(r0 - a0, r1 - a0), slice(0, w)))
-        return encode_png_rows(rgba, last=r1 == h)
+            return block(z[a0:a1], (slice(r0 - a0, r1 - a0), slice(0, w)))
 
-    write_png_blocks(path, (h, w, 4), _in_order(encode, starts, threads()), dpi=dpi)
+    if geotiff is None:
+        blocks = _in_order(lambda r0: encode_png_rows(mapped(r0), last=r0 + rows >= h),
+                           starts, threads())  # fmt: skip
+        write_png_blocks(path, (h, w, 4), blocks, dpi=dpi)
+        return h, w
+    chunks = (tuple(min(rows, h - r0) for r0 in starts), (w,))
+    with cog_target(geotiff, (h, w, 4), chunks, dem=d) as sink:
+
+        def both(r0: int) -> tuple[bytes, int, int]:
+            rgba = mapped(r0)
+            sink.encode(rgba, r0, 0)  # the COG's tiles, deflated here
+            return encode_png_rows(rgba, last=r0 + rows >= h)
+
+        write_png_blocks(path, (h, w, 4), _in_order(both, starts, threads()), dpi=dpi)
     return h, w
 
 

@@ -39,9 +39,12 @@ from .geotiff import check_tiff, georeference, rasterio_crs
 from .png import check_image, to_uint8, write_png
 
 __all__ = [
+    "BLOCK",
     "BYTES_PER_MAP_CELL",
     "check_chunk_memory",
+    "check_cog_target",
     "check_worker_memory",
+    "cog_target",
     "killed_worker_error",
     "local_client",
     "write_cog",
@@ -198,22 +201,68 @@ def write_cog(
         beside them, checked (GDAL reads the TIFF whole, its layout a COG) and renamed only
         when both are done (the preview first).
     """
+    _cog_paths(path, overview_png, overview_size)
+    pixels = _as_uint8(image)
+    is_lazy = _dask.is_dask(pixels)
+    if is_lazy:
+        pixels = _aligned(pixels)
+        chunks = pixels.chunks[:2]
+    else:
+        chunks = tuple(_steps(n, NUMPY_BLOCK) for n in pixels.shape[:2])
+    with cog_target(
+        path, pixels.shape, chunks, dem=dem, transform=transform, crs=crs,
+        overview_png=overview_png, overview_size=overview_size, progress_bar=progress_bar,
+    ) as sink:  # fmt: skip
+        if is_lazy:
+            _compute_into(pixels, sink, client, sink.job)
+        else:
+            _encode_numpy(pixels, chunks, sink, sink.job)
+    return Path(path)
+
+
+def _cog_paths(
+    path: str | os.PathLike, overview_png: str | os.PathLike | None, overview_size: int
+) -> tuple[Path, Path | None]:
+    """The checked COG path and preview path (None), and ``overview_size``."""
     out = _tif_path(path)
     png = None if overview_png is None else _png_path(overview_png)
     if isinstance(overview_size, bool) or not isinstance(overview_size, (int, np.integer)):
         raise InputError(f"overview_size: expected a positive int, got {overview_size!r}")
     if overview_size < 1:
         raise InputError(f"overview_size: expected a positive int, got {overview_size!r}")
-    pixels = _as_uint8(image)
-    h, w, c = pixels.shape
+    return out, png
+
+
+def check_cog_target(path: str | os.PathLike, dem: object) -> None:
+    """Raise :class:`~sciviz_gbuf.errors.InputError` unless :func:`write_cog` could write a
+    COG of ``dem``'s grid to ``path`` (its name, folder and georeference): for a caller that
+    checks before it computes the image."""
+    _cog_paths(path, None, 2048)
+    georeference(dem, None, None, "write_cog")
+
+
+@contextmanager
+def cog_target(
+    path: str | os.PathLike, shape: tuple[int, ...], chunks: tuple, *, dem: object = None,
+    transform: Sequence[float] | None = None, crs: str | None = None,
+    overview_png: str | os.PathLike | None = None, overview_size: int = 2048,
+    progress_bar: bool = False,
+) -> Iterator[_Sink]:  # fmt: skip
+    """The COG :func:`write_cog` writes, of an (H, W, C) uint8 image cut into blocks of
+    ``chunks`` (row sizes, column sizes; each a multiple of 512 but the last), as a sink:
+    ``sink(r0, c0, tiles, piece)`` stores the result of
+    :func:`~sciviz_gbuf.writers._cog_layout.encode_block` ``(block, r0, c0, *sink.job)`` of
+    each block (from any thread, in any order); ``sink.encode(block, r0, c0)`` does both.
+    The paths and the georeference are checked on entry; on leaving without an error the
+    coarse levels are encoded and the COG (and its preview) written, checked and renamed
+    into place; on an error nothing is left.
+
+    For images made block by block elsewhere (the streamed topographic map): each block's
+    tiles are deflated where the block is made."""
+    out, png = _cog_paths(path, overview_png, overview_size)
+    h, w, c = (int(v) for v in shape)
     gt = georeference(dem, transform, crs, "write_cog", (h, w))
     geo = geo_entries(tuple(gt), rasterio_crs(dem.crs if dem is not None else crs))
-    is_lazy = _dask.is_dask(pixels)
-    if is_lazy:
-        pixels = _aligned(pixels)
-        chunks = pixels.chunks[:2]
-    else:
-        chunks = tuple(_steps(n, NUMPY_BLOCK) for n in (h, w))
     n_blocks = len(chunks[0]) * len(chunks[1])
     n_levels = len(level_shapes(h, w))
     top = worker_levels(chunks, n_levels)
@@ -229,11 +278,8 @@ def write_cog(
         store = TileStore((h, w, c), lambda tag: scratch.enter_context(scratch_file(out, tag)))
         scratch.callback(store.close)
         sink = _Sink(store, top, bar, n_blocks)
-        job = (top, n_levels, zlevel)
-        if is_lazy:
-            _compute_into(pixels, sink, client, job)
-        else:
-            _encode_numpy(pixels, chunks, sink, job)
+        sink.job = (top, n_levels, zlevel)
+        yield sink
         if top < n_levels - 1:
             store.encode_levels(top + 1, zlevel, bar.step)
         gap = store.missing()
@@ -250,7 +296,6 @@ def write_cog(
         if png is not None:
             _overview_png(part.path, png, int(overview_size))
             bar.step("overview")
-    return out
 
 
 def _steps(n: int, step: int) -> tuple[int, ...]:
@@ -273,8 +318,15 @@ class _Sink:
 
     def __init__(self, store: TileStore, top: int, bar: Any, total: int) -> None:
         self.store, self.top, self.bar, self.total = store, top, bar, total
+        #: ``(top, n_levels, zlevel)``: encode_block's arguments after the block's origin
+        self.job: tuple = ()
         self.done = 0
         self.lock = threading.Lock()
+
+    def encode(self, block: np.ndarray, r0: int, c0: int) -> None:
+        """Encode an (h, w, c) uint8 block at pixel ``(r0, c0)`` here (this thread) and
+        store it."""
+        self(r0, c0, *encode_block(block, r0, c0, *self.job))
 
     def __call__(self, r0: int, c0: int, tiles: list, piece: np.ndarray | None) -> None:
         self.store.add(tiles)

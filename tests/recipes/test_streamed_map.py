@@ -146,6 +146,66 @@ def test_a_failing_block_leaves_no_file(monkeypatch, tmp_path):
     assert not list(tmp_path.iterdir())
 
 
+# ---------------------------------------------------------------- a COG from the same blocks
+SRTM = "SRTMGL3_40.09_-105.55_40.21_-105.35.asc"
+
+
+@pytest.mark.parametrize("kwargs", [{"scale": 4}, {"scale": 4, "generalize": False}])
+def test_streamed_geotiff_is_the_cog_of_the_whole_map(kwargs, streamed, monkeypatch, tmp_path):
+    """The COG written from the streamed blocks (576 rows: two blocks of whole tile rows) has
+    the bytes write_cog makes of the whole map, and the PNG its pixels."""
+    from sciviz_gbuf.writers import cog
+
+    encoded = []
+    real = cog._Sink.encode
+    monkeypatch.setattr(
+        cog._Sink, "encode", lambda self, *a: encoded.append(a[1:]) or real(self, *a)
+    )
+    d = _dem(SRTM)
+    ref = topographic_map(d, **kwargs)
+    h, w = write_topographic_png(tmp_path / "m.png", d, **kwargs, geotiff=tmp_path / "m.tif")
+    assert streamed and (h, w) == ref.shape[:2] == (576, 960)
+    assert sorted(encoded) == [(0, 0), (512, 0)], "not two blocks of whole tile rows"
+    assert np.array_equal(_png(tmp_path / "m.png"), ref)
+    cog.write_cog(ref, tmp_path / "ref.tif", dem=d)
+    assert (tmp_path / "m.tif").read_bytes() == (tmp_path / "ref.tif").read_bytes()
+    cog.check_cog(tmp_path / "m.tif")
+
+
+def test_geotiff_of_a_map_made_whole(tmp_path):
+    """Small maps are made whole: their COG is write_cog's too."""
+    from sciviz_gbuf.writers import cog
+
+    d = _dem("hugo_site.asc")
+    write_topographic_png(tmp_path / "m.png", d, geotiff=tmp_path / "m.tif")
+    cog.write_cog(topographic_map(d), tmp_path / "ref.tif", dem=d)
+    assert (tmp_path / "m.tif").read_bytes() == (tmp_path / "ref.tif").read_bytes()
+
+
+def test_a_bad_geotiff_is_refused_before_mapping(streamed, tmp_path):
+    d = _dem("hugo_site.asc")
+    for bad, message in ((tmp_path / "g.png", r"\.tif"), (tmp_path / "no" / "g.tif", "directory")):
+        with pytest.raises(InputError, match=message):
+            write_topographic_png(tmp_path / "m.png", d, geotiff=bad)
+    assert not streamed and not list(tmp_path.iterdir())
+
+
+def test_a_failing_block_leaves_neither_file(streamed, monkeypatch, tmp_path):
+    real = terrain.encode_png_rows
+    seen = []
+
+    def broken(rgba, last):
+        seen.append(1)
+        if last:
+            raise MemoryError("the last block")
+        return real(rgba, last=last)
+
+    monkeypatch.setattr(terrain, "encode_png_rows", broken)
+    with pytest.raises(MemoryError):
+        write_topographic_png(tmp_path / "m.png", _dem(SRTM), scale=4, geotiff=tmp_path / "m.tif")
+    assert len(seen) == 2 and not list(tmp_path.iterdir())
+
+
 # ------------------------------------------------------------------------- the PNG's blocks
 @settings(max_examples=40, deadline=None)
 @given(
@@ -218,3 +278,26 @@ def test_cli_png_streams_the_pixels_of_the_whole_map(monkeypatch, tmp_path, caps
     with Image.open(tmp_path / "m.png") as im:
         assert round(im.info["dpi"][0]) == 150
     assert f"({got.shape[1]}x{got.shape[0]})" in capsys.readouterr().out
+
+
+def test_cli_geotiff_streams_with_the_png(monkeypatch, tmp_path):
+    """``-o map.png --geotiff map.tif`` streams both: the COG's pixels are the PNG's."""
+    import rasterio
+
+    monkeypatch.setattr(terrain, "LARGE_IMAGE", 1)
+    calls = []
+    real = terrain.window_map
+    monkeypatch.setattr(terrain, "window_map", lambda *a, **k: calls.append(1) or real(*a, **k))
+    src = DATA / SRTM
+    png, tif = tmp_path / "m.png", tmp_path / "m.tif"
+    assert main(["topo", str(src), "-o", str(png), "--geotiff", str(tif), "--scale", "4",
+                 "--no-progress"]) == 0  # fmt: skip
+    assert calls, "the map did not stream"
+    with rasterio.open(tif) as f:
+        rgba = np.moveaxis(f.read(), 0, 2)
+        assert f.overviews(1) == [2] and f.block_shapes[0] == (512, 512)
+        gt = f.transform.to_gdal()
+    with pytest.warns(UserWarning, match="degrees"):
+        x0, dx, _, y0, _, dy = read_dem(src).transform
+    assert gt == pytest.approx((x0, dx / 4, 0.0, y0, 0.0, dy / 4), rel=1e-12)  # --scale 4
+    assert np.array_equal(rgba, _png(png))
