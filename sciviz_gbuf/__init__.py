@@ -33,6 +33,7 @@ _EXPORTS = {
     "ct_enhance": "recipes.medical",
     "surface_analysis": "recipes.surface",
     "topographic_map": "recipes.terrain",
+    "write_topographic_cog": "recipes.terrain",
     "write_topographic_png": "recipes.terrain",
     "ContourLabel": "recipes.labels",
     "contour_labels": "recipes.labels",
@@ -76,6 +77,7 @@ __all__ = [
     "write_cog",
     "write_pdf",
     "write_svg",
+    "write_topographic_cog",
     "write_topographic_png",
 ]  # = _EXPORTS and __version__ (tests/test_structure.py checks)
 
@@ -93,6 +95,6 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerl
     from .recipes.labels import ContourLabel, contour_labels, labels_to_geojson
     from .recipes.medical import ct_enhance
     from .recipes.surface import surface_analysis
-    from .recipes.terrain import topographic_map, write_topographic_png
+    from .recipes.terrain import topographic_map, write_topographic_cog, write_topographic_png
     from .writers.cog import local_client, write_cog
     from .writers.vector import write_pdf, write_svg

@@ -18,7 +18,7 @@ from ..errors import InputError
 from ..readers import read_dem
 from ..recipes.labels import contour_labels, label_options, labels_to_geojson
 from ..recipes.layout import write_map_page
-from ..recipes.terrain import topographic_map, write_topographic_png
+from ..recipes.terrain import topographic_map, write_topographic_cog, write_topographic_png
 from ..recipes.tiles import write_map_tiles
 from ..writers.cog import (
     check_chunk_memory,
@@ -239,13 +239,19 @@ def _topo_in_memory(
         dem = _read_terrain(source, args.geographic)
         loader.join()
         bar.step("map")
-        if not tif and not args.labels:
+        if not args.labels:
             # mapped and written block by block (the same pixels, mapping and deflating at once;
-            # a --geotiff COG from the same blocks)
+            # a COG's tiles deflated with each block)
             opts = _topo_options(args, show)
             for key in ("progress_bar", "dpi"):
                 opts.pop(key, None)
-            h, w = write_topographic_png(out, dem, **opts, dpi=args.dpi, geotiff=args.geotiff)
+            if tif:
+                h, w = write_topographic_cog(out, dem, **opts, dpi=args.dpi,
+                                             overview_png=args.overview,
+                                             overview_size=args.overview_size)  # fmt: skip
+            else:
+                h, w = write_topographic_png(out, dem, **opts, dpi=args.dpi,
+                                             geotiff=args.geotiff)  # fmt: skip
             bar.step("write")
             if args.geotiff is not None:
                 bar.step("geotiff")

@@ -65,6 +65,7 @@ _EXPORTS = {
     "map_grid": "terrain",
     "nice_intervals": "terrain",
     "topographic_map": "terrain",
+    "write_topographic_cog": "terrain",
     "write_topographic_png": "terrain",
     "TilePyramid": "tiles",
     "mercator_dem": "tiles",
@@ -134,6 +135,7 @@ __all__ = [
     "view_camera",
     "write_map_tiles",
     "write_panels",
+    "write_topographic_cog",
     "write_topographic_png",
     "write_vector",
 ]
@@ -168,7 +170,13 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerl
     )
     from .saito1990 import CAPTIONS, fig3_panels, fig7_panels, nut_camera
     from .surface import seam_patches, surface_analysis, surface_gbuffer, surface_layers
-    from .terrain import map_grid, nice_intervals, topographic_map, write_topographic_png
+    from .terrain import (
+        map_grid,
+        nice_intervals,
+        topographic_map,
+        write_topographic_cog,
+        write_topographic_png,
+    )
     from .tiles import TilePyramid, mercator_dem, native_zoom, tile_bounds, write_map_tiles
     from .vector import (
         VectorPicture,

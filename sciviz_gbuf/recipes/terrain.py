@@ -61,6 +61,7 @@ __all__ = [
     "resample_heights",
     "topographic_map",
     "typical_slope",
+    "write_topographic_cog",
     "write_topographic_png",
 ]
 
@@ -358,31 +359,103 @@ def write_topographic_png(
     OutputError
         The file could not be written completely.
     """
-    opts = {
-        "interval": interval, "major_interval": major_interval, "contours": contours,
-        "width": width, "major_width": major_width, "dense_spacing": dense_spacing,
-        "generalize": generalize, "bands": bands, "cmap": cmap, "sea_level": sea_level,
-        "vmin": vmin, "vmax": vmax, "relief": relief, "azimuth": azimuth,
-        "altitude": altitude, "variant": variant, "shadows": shadows, "sky_view": sky_view,
-    }  # fmt: skip
-    colour = _validate.rgb(contour_color, "contour_color")
+    options = {k: v for k, v in locals().items() if k not in ("path", "dem", "geotiff")}
+    return _write_map(dem, path, geotiff, options)
+
+
+def write_topographic_cog(
+    path: str | os.PathLike,
+    dem: DEM | str | os.PathLike | np.ndarray,
+    *,
+    overview_png: str | os.PathLike | None = None,
+    overview_size: int = 2048,
+    **options: object,
+) -> tuple[int, int]:
+    """Write :func:`topographic_map` of a DEM as a Cloud-Optimised GeoTIFF, block of rows by
+    block of rows as they are mapped, each block's tiles deflated where it is mapped (as
+    :func:`write_topographic_png` streams a PNG): the bytes of
+    ``write_cog(topographic_map(dem, **options), path, dem=...)``, the whole map never in
+    memory.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The ``.tif`` to write (atomically).
+    dem : DEM, path or (H, W) array
+        As :func:`topographic_map`; the COG takes its georeference (the map's pixel size).
+    overview_png, overview_size
+        As :func:`~sciviz_gbuf.writers.cog.write_cog`: a PNG preview read from the COG's
+        overviews.
+    **options
+        The keyword options of :func:`write_topographic_png` but ``geotiff`` (those of
+        :func:`topographic_map`, and ``dpi``).
+
+    Returns
+    -------
+    (int, int)
+        The map's height and width in pixels.
+
+    Raises
+    ------
+    InputError
+        An unknown option, or as :func:`topographic_map` and
+        :func:`~sciviz_gbuf.writers.cog.write_cog`.
+    OutputError
+        The COG or its preview could not be written completely: neither is left.
+    """
+    defaults = _write_defaults()
+    unknown = sorted(set(options) - set(defaults))
+    if unknown:
+        raise InputError(f"{unknown[0]}: not an option of write_topographic_cog "
+                         f"(expected one of {', '.join(sorted(defaults))})")  # fmt: skip
+    return _write_map(dem, None, path, {**defaults, **options}, overview_png, overview_size)
+
+
+def _write_defaults() -> dict:
+    """The map options of :func:`write_topographic_png` and their defaults."""
+    import inspect
+
+    params = inspect.signature(write_topographic_png).parameters
+    return {k: p.default for k, p in params.items() if k not in ("path", "dem", "geotiff")}
+
+
+#: The options of a map's layers (:func:`_map_dem`), of :func:`write_topographic_png`'s.
+_LAYER_OPTIONS = (
+    "interval", "major_interval", "contours", "width", "major_width", "dense_spacing",
+    "generalize", "bands", "cmap", "sea_level", "vmin", "vmax", "relief", "azimuth",
+    "altitude", "variant", "shadows", "sky_view",
+)  # fmt: skip
+
+
+def _write_map(
+    dem: DEM | str | os.PathLike | np.ndarray, png: str | os.PathLike | None,
+    cog: str | os.PathLike | None, o: dict, overview_png: str | os.PathLike | None = None,
+    overview_size: int = 2048,
+) -> tuple[int, int]:  # fmt: skip
+    """:func:`write_topographic_png` (``png``, and a COG ``cog`` if given) and
+    :func:`write_topographic_cog` (``png`` None) with their options ``o``."""
+    opts = {k: o[k] for k in _LAYER_OPTIONS}
+    colour = _validate.rgb(o["contour_color"], "contour_color")
+    dpi, size, scale = o["dpi"], o["size"], o["scale"]
     map_dpi = dpi if scale is not None else None  # with a scale it sizes the map too
-    z_factor = _check_map_args(width, major_width, dense_spacing, size, scale, map_dpi, z_factor)
-    style = relief_style(relief)
+    z_factor = _check_map_args(o["width"], o["major_width"], o["dense_spacing"], size, scale,
+                               map_dpi, o["z_factor"])  # fmt: skip
+    style = relief_style(o["relief"])
     d, options = _map_dem(dem, **opts, z_factor=z_factor, size=size, scale=scale, dpi=map_dpi)
     h, w = d.shape
-    if geotiff is not None:
-        check_cog_target(geotiff, d)  # before any mapping
-    whole = shadows or style in ("texture", "local_relief") or _dask.is_dask(d.heights)
+    if cog is not None:
+        check_cog_target(cog, d, overview_png, overview_size)  # before any mapping
+    whole = o["shadows"] or style in ("texture", "local_relief") or _dask.is_dask(d.heights)
     if whole or h * w < LARGE_IMAGE:
-        image = topographic_map(d, contour_color=contour_color, **opts, z_factor=z_factor)
-        write_png(path, image, dpi=dpi)
-        if geotiff is not None:
-            write_cog(image, geotiff, dem=d)
+        image = topographic_map(d, contour_color=o["contour_color"], **opts, z_factor=z_factor)
+        if png is not None:
+            write_png(png, image, dpi=dpi)
+        if cog is not None:
+            write_cog(image, cog, dem=d, overview_png=overview_png, overview_size=overview_size)
         return image.shape[0], image.shape[1]
     block, halo = _map_block(d, colour, options)
     rows = max(STREAM_ROWS, STREAM_HALOS * halo)
-    if geotiff is not None:
+    if cog is not None:
         rows = -(-rows // BLOCK) * BLOCK  # whole rows of COG tiles in every block
     starts = range(0, h, rows)
     z = d.heights
@@ -393,20 +466,26 @@ def write_topographic_png(
         with on_this_thread():  # the other cores map other blocks
             return block(z[a0:a1], (slice(r0 - a0, r1 - a0), slice(0, w)))
 
-    if geotiff is None:
+    if cog is None:
         blocks = _in_order(lambda r0: encode_png_rows(mapped(r0), last=r0 + rows >= h),
                            starts, threads())  # fmt: skip
-        write_png_blocks(path, (h, w, 4), blocks, dpi=dpi)
+        write_png_blocks(png, (h, w, 4), blocks, dpi=dpi)
         return h, w
     chunks = (tuple(min(rows, h - r0) for r0 in starts), (w,))
-    with cog_target(geotiff, (h, w, 4), chunks, dem=d) as sink:
+    with cog_target(cog, (h, w, 4), chunks, dem=d, overview_png=overview_png,
+                    overview_size=overview_size) as sink:  # fmt: skip
 
-        def both(r0: int) -> tuple[bytes, int, int]:
+        def both(r0: int) -> tuple[bytes, int, int] | None:
             rgba = mapped(r0)
             sink.encode(rgba, r0, 0)  # the COG's tiles, deflated here
-            return encode_png_rows(rgba, last=r0 + rows >= h)
+            return None if png is None else encode_png_rows(rgba, last=r0 + rows >= h)
 
-        write_png_blocks(path, (h, w, 4), _in_order(both, starts, threads()), dpi=dpi)
+        encoded = _in_order(both, starts, threads())
+        if png is None:
+            for _ in encoded:
+                pass
+        else:
+            write_png_blocks(png, (h, w, 4), encoded, dpi=dpi)
     return h, w
 
 

@@ -233,11 +233,14 @@ def _cog_paths(
     return out, png
 
 
-def check_cog_target(path: str | os.PathLike, dem: object) -> None:
+def check_cog_target(
+    path: str | os.PathLike, dem: object, overview_png: str | os.PathLike | None = None,
+    overview_size: int = 2048,
+) -> None:  # fmt: skip
     """Raise :class:`~sciviz_gbuf.errors.InputError` unless :func:`write_cog` could write a
-    COG of ``dem``'s grid to ``path`` (its name, folder and georeference): for a caller that
-    checks before it computes the image."""
-    _cog_paths(path, None, 2048)
+    COG of ``dem``'s grid to ``path`` with that preview (names, folders, size and
+    georeference): for a caller that checks before it computes the image."""
+    _cog_paths(path, overview_png, overview_size)
     georeference(dem, None, None, "write_cog")
 
 

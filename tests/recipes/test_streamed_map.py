@@ -172,6 +172,41 @@ def test_streamed_geotiff_is_the_cog_of_the_whole_map(kwargs, streamed, monkeypa
     cog.check_cog(tmp_path / "m.tif")
 
 
+@pytest.mark.parametrize("kwargs", [{"scale": 4}, {"scale": 4, "relief": "vat", "bands": False}])
+def test_streamed_cog_is_write_cog_of_the_whole_map(kwargs, streamed, tmp_path):
+    """write_topographic_cog: the bytes of write_cog(topographic_map(...)), preview too."""
+    from sciviz_gbuf.recipes.terrain import write_topographic_cog
+    from sciviz_gbuf.writers import cog
+
+    d = _dem(SRTM)
+    out = write_topographic_cog(tmp_path / "m.tif", d, **kwargs, overview_png=tmp_path / "m.png",
+                                overview_size=300)  # fmt: skip
+    assert streamed and out == (576, 960)
+    ref = topographic_map(d, **kwargs)
+    cog.write_cog(ref, tmp_path / "r.tif", dem=d, overview_png=tmp_path / "r.png",
+                  overview_size=300)  # fmt: skip
+    for a, b in (("m.tif", "r.tif"), ("m.png", "r.png")):
+        assert (tmp_path / a).read_bytes() == (tmp_path / b).read_bytes()
+
+
+def test_write_topographic_cog_refuses_before_mapping(streamed, tmp_path):
+    from sciviz_gbuf.recipes.terrain import write_topographic_cog
+
+    d = _dem("hugo_site.asc")
+    for kwargs, message in (
+        ({"geotiff": tmp_path / "g.tif"}, "geotiff: not an option"),
+        ({"colour": "red"}, "colour: not an option"),
+        ({"overview_png": tmp_path / "o.jpg"}, r"overview_png.*\.png"),
+        ({"overview_size": 0}, "overview_size"),
+        ({"width": -1.0}, "width"),
+    ):
+        with pytest.raises(InputError, match=message):
+            write_topographic_cog(tmp_path / "m.tif", d, **kwargs)
+    with pytest.raises(InputError, match=r"\.tif"):
+        write_topographic_cog(tmp_path / "m.png", d)
+    assert not streamed and not list(tmp_path.iterdir())
+
+
 def test_geotiff_of_a_map_made_whole(tmp_path):
     """Small maps are made whole: their COG is write_cog's too."""
     from sciviz_gbuf.writers import cog
@@ -301,3 +336,22 @@ def test_cli_geotiff_streams_with_the_png(monkeypatch, tmp_path):
         x0, dx, _, y0, _, dy = read_dem(src).transform
     assert gt == pytest.approx((x0, dx / 4, 0.0, y0, 0.0, dy / 4), rel=1e-12)  # --scale 4
     assert np.array_equal(rgba, _png(png))
+
+
+def test_cli_cog_streams(monkeypatch, tmp_path):
+    """``-o map.tif`` streams: the bytes of write_cog of the map made whole."""
+    from sciviz_gbuf.writers import cog
+
+    monkeypatch.setattr(terrain, "LARGE_IMAGE", 1)
+    calls = []
+    real = terrain.window_map
+    monkeypatch.setattr(terrain, "window_map", lambda *a, **k: calls.append(1) or real(*a, **k))
+    src = DATA / "pre_runout_DEM.asc"
+    tif = tmp_path / "m.tif"
+    assert main(["topo", str(src), "-o", str(tif), "--overview", str(tmp_path / "o.png"),
+                 "--no-progress"]) == 0  # fmt: skip
+    assert calls, "the map did not stream"
+    d = read_dem(src)
+    cog.write_cog(topographic_map(d), tmp_path / "r.tif", dem=d, overview_png=tmp_path / "r.png")
+    assert tif.read_bytes() == (tmp_path / "r.tif").read_bytes()
+    assert (tmp_path / "o.png").read_bytes() == (tmp_path / "r.png").read_bytes()
