@@ -4,9 +4,10 @@ On a synthetic GeoTIFF DEM (fractal terrain, float32, 10 m UTM cells, a nodata l
 same run:
 
 - ours: ``sciviz-gbuf topo DEM -o map.png --contours 20,100`` - relief, colour bands and
-  major/minor contour lines composited into one RGBA PNG (and once more with ``--geotiff``);
-  the default map generalises its contour lines (a cartographic step GDAL has not), so it is
-  also timed with ``--exact-contours``, the lines ``gdal_contour`` traces;
+  major/minor contour lines composited into one RGBA PNG; once more with ``--geotiff`` (the
+  PNG and a COG from the same blocks) and as ``-o map.tif`` (a COG alone); the default map
+  generalises its contour lines (a cartographic step GDAL has not), so each is also timed
+  with ``--exact-contours``, the lines ``gdal_contour`` traces;
 - ours at ``--scale S`` (default 4): the map at S output pixels per DEM cell (heights resampled
   by clamped cubic convolution first), for DEMs whose map side stays within ``--max-side``;
   MPix/s counts output pixels;
@@ -174,19 +175,19 @@ def main() -> None:
                     ["gdal_contour", "-q", "-i", "20", "-a", "elev", str(dem), str(t / "c.gpkg")],
                 ),
             ]
+            png, cog = str(t / "map.png"), str(t / "map.tif")
+            exact = "--exact-contours"  # gdal_contour's lines (no generalisation): like for like
             ours_cmds = [
-                ("sciviz-gbuf topo --contours 20,100 (PNG)", [], 1.0),
-                # the lines gdal_contour draws (no cartographic generalisation): like for like
-                ("sciviz-gbuf topo ... --exact-contours (PNG)", ["--exact-contours"], 1.0),
-                (
-                    "sciviz-gbuf topo ... --geotiff (PNG + TIF)",
-                    ["--geotiff", str(t / "m.tif")],
-                    1.0,
-                ),
+                ("sciviz-gbuf topo --contours 20,100 (PNG)", png, [], 1.0),
+                ("sciviz-gbuf topo ... --exact-contours (PNG)", png, [exact], 1.0),
+                ("sciviz-gbuf topo ... --geotiff (PNG + COG)", png, ["--geotiff", cog], 1.0),
+                ("sciviz-gbuf topo ... --exact ... --geotiff", png, [exact, "--geotiff", cog], 1.0),
+                ("sciviz-gbuf topo ... -o map.tif (COG)", cog, [], 1.0),
+                ("sciviz-gbuf topo ... --exact ... -o map.tif", cog, [exact], 1.0),
             ]
             for k in (float(v) for v in args.scales.split(",") if v):
                 if n * k <= args.max_side:
-                    ours_cmds.append((f"sciviz-gbuf topo ... --scale {k:g} (PNG)",
+                    ours_cmds.append((f"sciviz-gbuf topo ... --scale {k:g} (PNG)", png,
                                       ["--scale", f"{k:g}"], k))  # fmt: skip
             rows = []
             gdal_total = 0.0
@@ -195,8 +196,8 @@ def main() -> None:
                 gdal_total += s
                 rows.append((name, s, rss, 1.0))
             rows.append(("GDAL total (3 commands)", gdal_total, float("nan"), 1.0))
-            for name, extra, k in ours_cmds:
-                cmd = [*ours, "topo", str(dem), "-o", str(t / "map.png"), "--contours", "20,100"]
+            for name, out, extra, k in ours_cmds:
+                cmd = [*ours, "topo", str(dem), "-o", out, "--contours", "20,100"]
                 s, rss = run([*cmd, *extra, "--no-progress"], args.repeat)
                 rows.append((name, s, rss, k))
             for name, s, rss, k in rows:
