@@ -393,7 +393,8 @@ def _topo_out_of_core(args: argparse.Namespace, source, out: Path, show: bool, t
 
 def _topo_tiles(args: argparse.Namespace, source, t0: float) -> int:
     """``--tiles FOLDER``: the map of every zoom level cut into an XYZ tile pyramid with a
-    Leaflet viewer (index.html)."""
+    Leaflet viewer (index.html); ``--tiles FILE.pmtiles``: the same tiles in one PMTiles
+    archive."""
     if args.output is not None:
         raise InputError("--tiles: the map is written as tiles into the folder: leave out -o")
     refused = (("--page", args.page), ("--geotiff", args.geotiff), ("--overview", args.overview),
@@ -409,7 +410,10 @@ def _topo_tiles(args: argparse.Namespace, source, t0: float) -> int:
             "--chunks/--dask"
         )
     out = Path(args.tiles)
-    if out.exists() and (not out.is_dir() or any(out.iterdir())):
+    archive = out.suffix.lower() == ".pmtiles"
+    if archive and out.is_dir():
+        raise InputError(f"--tiles: {str(out)!r} is a folder; a .pmtiles archive is a file")
+    if not archive and out.exists() and (not out.is_dir() or any(out.iterdir())):
         raise InputError(f"--tiles: {str(out)!r} exists and is not an empty folder")
     if not out.parent.is_dir():
         raise InputError(f"--tiles: no such directory {str(out.parent)!r}")
@@ -436,9 +440,11 @@ def _topo_tiles(args: argparse.Namespace, source, t0: float) -> int:
         _close_client(args, client)
     z0, z1 = pyramid.zooms
     per = ", ".join(f"{z}: {n}" for z, n in pyramid.tiles.items())
+    where = f"{out}" if archive else f"{out}/"
+    viewer = "" if archive else f"; viewer {out / 'index.html'}"
     print(
-        f"wrote {out}/ ({pyramid.count} tiles, zoom {z0}-{z1}: {per}; viewer "
-        f"{out / 'index.html'}) in {time.perf_counter() - t0:.1f} s"
+        f"wrote {where} ({pyramid.count} tiles, zoom {z0}-{z1}: {per}{viewer}) in "
+        f"{time.perf_counter() - t0:.1f} s"
     )
     return 0
 

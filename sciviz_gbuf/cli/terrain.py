@@ -428,9 +428,10 @@ def add_topo(sub) -> None:
     tiles.add_argument(
         "--tiles",
         default=None,
-        metavar="FOLDER",
+        metavar="FOLDER|FILE.pmtiles",
         help="write the map as an XYZ web-map tile pyramid (Web Mercator, FOLDER/z/x/y.png) "
-        "with a viewer, FOLDER/index.html (Leaflet, bundled); instead of -o",
+        "with a viewer, FOLDER/index.html (Leaflet, bundled), or as one PMTiles archive "
+        "(a name ending in .pmtiles); instead of -o",
     )
     tiles.add_argument(
         "--zoom",

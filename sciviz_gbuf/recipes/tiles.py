@@ -18,7 +18,8 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Callable, Sequence
+import tempfile
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -29,6 +30,7 @@ from .. import _validate
 from .._atomic import atomic_folder
 from ..errors import InputError
 from ..readers import DEM
+from ..writers.pmtiles import write_pmtiles
 from ..writers.tiles import TILE_FORMATS, encode_tile, write_tile_viewer, write_tilejson
 from ._map import as_dem
 from .terrain import topographic_map
@@ -431,7 +433,8 @@ class TilePyramid:
     Attributes
     ----------
     path : Path
-        The pyramid's folder (``z/x/y.<format>``, ``tiles.json``, ``index.html``).
+        The pyramid's folder (``z/x/y.<format>``, ``tiles.json``, ``index.html``), or its
+        PMTiles archive.
     zooms : (int, int)
         Its first and last zoom level.
     tiles : dict of int to int
@@ -490,7 +493,10 @@ def write_map_tiles(
         memory or read lazily (``read_dem(path, chunks=...)``, for DEMs larger than memory).
     path : str or path-like
         The pyramid's folder: new, or empty. It is written as a whole: into a temporary
-        folder beside it, renamed when complete (nothing is left of a failed run).
+        folder beside it, renamed when complete (nothing is left of a failed run). A name
+        ending in ``.pmtiles`` writes one PMTiles archive instead
+        (:func:`~sciviz_gbuf.writers.pmtiles.write_pmtiles`: the same tiles, for a static web
+        server or object store and a PMTiles-aware viewer), from a scratch folder beside it.
     zoom : int or (int, int), optional
         Zoom levels, inclusive (0-24). Default: the DEM's native zoom (pixels no larger than
         its cells, :func:`native_zoom`) and the four below it.
@@ -530,14 +536,16 @@ def write_map_tiles(
     layers below). The folder also holds ``tiles.json`` (TileJSON 3.0) and ``index.html``,
     a Leaflet viewer (bundled, no network needed) of the pyramid.
     """
-    import dask
 
     d = as_dem(dem)
     tile_size = _check_tile_size(tile_size)
     fmt = _validate.choice(str(format).lower(), "format", TILE_FORMATS)
     zmin, zmax = _check_zooms(zoom, d, tile_size)
     out = Path(path)
-    if out.exists() and (not out.is_dir() or any(out.iterdir())):
+    archive = out.suffix.lower() == ".pmtiles"
+    if archive and out.is_dir():
+        raise InputError(f"path: {str(out)!r} is a folder; a .pmtiles archive is a file")
+    if not archive and out.exists() and (not out.is_dir() or any(out.iterdir())):
         raise InputError(f"path: {str(out)!r} exists and is not an empty folder")
     if not out.parent.is_dir():
         raise InputError(f"path: no such directory {str(out.parent)!r}")
@@ -565,47 +573,74 @@ def write_map_tiles(
     # checked once, on a small map, before anything is computed or written
     topographic_map(np.zeros((4, 4), np.float32), **{**opts, "labels": False})
     written: dict[int, int] = {}
+    name = title or (Path(d.source).name if d.source else "map")
+    if archive:
+        # the tiles into a scratch folder beside the archive (workers write there too), then
+        # packed into the archive and removed
+        with tempfile.TemporaryDirectory(dir=out.parent, prefix=f".{out.name}.") as tmp:
+            _map_levels(Path(tmp), levels, d, opts, labels, client, fmt, tile_size,
+                        written, progress)  # fmt: skip
+            write_pmtiles(_tile_files(Path(tmp), fmt), out, fmt=fmt, bounds=bounds, name=name)
+        return TilePyramid(out, (zmin, zmax), written, bounds)
     with atomic_folder(out) as tmp:
-        done = 0
-        for lv in levels:
-            zd = mercator_dem(d, lv.zoom, tile_size=tile_size)
-            whole = labels or (client is None and lv.shape[0] * lv.shape[1] <= IN_MEMORY_PIXELS)
-            if whole:
-                z_mem = np.asarray(zd.heights.compute())
-                zd = DEM(
-                    heights=z_mem, mask=np.isfinite(z_mem), crs=zd.crs,
-                    transform=zd.transform, pixel_size=zd.pixel_size, geographic=False,
-                    source=zd.source,
-                )  # fmt: skip
-            rgba = topographic_map(zd, **opts)
-            if whole:
-                written[lv.zoom] = _write_block(rgba, 0, 0, lv, str(tmp), fmt)
-                done += 1
-                if progress is not None:
-                    progress(done, len(levels))
-                continue
-            blocks = rgba.to_delayed().reshape(len(rgba.chunks[0]), len(rgba.chunks[1]))
-            starts = [np.cumsum((0, *c[:-1])) for c in rgba.chunks[:2]]
-            write = dask.delayed(_write_block)
-            tasks = [
-                write(blocks[i, j], int(starts[0][i]), int(starts[1][j]), lv, str(tmp), fmt)
-                for i in range(len(rgba.chunks[0]))
-                for j in range(len(rgba.chunks[1]))
-            ]
-            if client is not None:
-                counts = client.gather(client.compute(tasks))
-            else:
-                counts = dask.compute(*tasks)
-            written[lv.zoom] = int(sum(counts))
-            done += 1
-            if progress is not None:
-                progress(done, len(levels))
-        name = title or (Path(d.source).name if d.source else "map")
+        _map_levels(tmp, levels, d, opts, labels, client, fmt, tile_size, written, progress)
         write_tilejson(tmp / "tiles.json", name=name, bounds=bounds, zooms=(zmin, zmax),
                        fmt=fmt, tile_size=tile_size)  # fmt: skip
         write_tile_viewer(tmp, title=name, bounds=bounds, zooms=(zmin, zmax), fmt=fmt,
                           tile_size=tile_size)  # fmt: skip
     return TilePyramid(out, (zmin, zmax), written, bounds)
+
+
+def _tile_files(root: Path, fmt: str) -> Iterator[tuple[int, int, int, Path]]:
+    """``(z, x, y, file)`` of every tile of an XYZ folder ``root/z/x/y.<fmt>``."""
+    for zdir in root.iterdir():
+        for xdir in zdir.iterdir():
+            for f in xdir.glob(f"*.{fmt}"):
+                yield int(zdir.name), int(xdir.name), int(f.stem), f
+
+
+def _map_levels(
+    tmp: Path, levels: list, d: DEM, opts: dict, labels: bool, client: Any, fmt: str,
+    tile_size: int, written: dict[int, int], progress: Callable[[int, int], None] | None,
+) -> None:  # fmt: skip
+    """Map every level and write its tiles with data into the folder ``tmp`` (``z/x/y``),
+    their count per zoom into ``written``."""
+    import dask
+
+    done = 0
+    for lv in levels:
+        zd = mercator_dem(d, lv.zoom, tile_size=tile_size)
+        whole = labels or (client is None and lv.shape[0] * lv.shape[1] <= IN_MEMORY_PIXELS)
+        if whole:
+            z_mem = np.asarray(zd.heights.compute())
+            zd = DEM(
+                heights=z_mem, mask=np.isfinite(z_mem), crs=zd.crs,
+                transform=zd.transform, pixel_size=zd.pixel_size, geographic=False,
+                source=zd.source,
+            )  # fmt: skip
+        rgba = topographic_map(zd, **opts)
+        if whole:
+            written[lv.zoom] = _write_block(rgba, 0, 0, lv, str(tmp), fmt)
+            done += 1
+            if progress is not None:
+                progress(done, len(levels))
+            continue
+        blocks = rgba.to_delayed().reshape(len(rgba.chunks[0]), len(rgba.chunks[1]))
+        starts = [np.cumsum((0, *c[:-1])) for c in rgba.chunks[:2]]
+        write = dask.delayed(_write_block)
+        tasks = [
+            write(blocks[i, j], int(starts[0][i]), int(starts[1][j]), lv, str(tmp), fmt)
+            for i in range(len(rgba.chunks[0]))
+            for j in range(len(rgba.chunks[1]))
+        ]
+        if client is not None:
+            counts = client.gather(client.compute(tasks))
+        else:
+            counts = dask.compute(*tasks)
+        written[lv.zoom] = int(sum(counts))
+        done += 1
+        if progress is not None:
+            progress(done, len(levels))
 
 
 def _height_range(d: DEM) -> tuple[float, float]:
