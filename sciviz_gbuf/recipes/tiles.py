@@ -536,7 +536,6 @@ def write_map_tiles(
     layers below). The folder also holds ``tiles.json`` (TileJSON 3.0) and ``index.html``,
     a Leaflet viewer (bundled, no network needed) of the pyramid.
     """
-
     d = as_dem(dem)
     tile_size = _check_tile_size(tile_size)
     fmt = _validate.choice(str(format).lower(), "format", TILE_FORMATS)
