@@ -17,6 +17,7 @@ import os
 from collections import deque
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor
+from contextlib import nullcontext
 
 import numpy as np
 
@@ -419,12 +420,9 @@ def _write_defaults() -> dict:
     return {k: p.default for k, p in params.items() if k not in ("path", "dem", "geotiff")}
 
 
-#: The options of a map's layers (:func:`_map_dem`), of :func:`write_topographic_png`'s.
-_LAYER_OPTIONS = (
-    "interval", "major_interval", "contours", "width", "major_width", "dense_spacing",
-    "generalize", "bands", "cmap", "sea_level", "vmin", "vmax", "relief", "azimuth",
-    "altitude", "variant", "shadows", "sky_view",
-)  # fmt: skip
+#: The options of :func:`write_topographic_png` that size, scale and colour the map as a
+#: whole; the others are its layers' (:func:`_map_dem`).
+_FRAME_OPTIONS = ("contour_color", "z_factor", "size", "scale", "dpi")
 
 
 def _write_map(
@@ -434,7 +432,7 @@ def _write_map(
 ) -> tuple[int, int]:  # fmt: skip
     """:func:`write_topographic_png` (``png``, and a COG ``cog`` if given) and
     :func:`write_topographic_cog` (``png`` None) with their options ``o``."""
-    opts = {k: o[k] for k in _LAYER_OPTIONS}
+    opts = {k: v for k, v in o.items() if k not in _FRAME_OPTIONS}
     colour = _validate.rgb(o["contour_color"], "contour_color")
     dpi, size, scale = o["dpi"], o["size"], o["scale"]
     map_dpi = dpi if scale is not None else None  # with a scale it sizes the map too
@@ -466,21 +464,19 @@ def _write_map(
         with on_this_thread():  # the other cores map other blocks
             return block(z[a0:a1], (slice(r0 - a0, r1 - a0), slice(0, w)))
 
-    if cog is None:
-        blocks = _in_order(lambda r0: encode_png_rows(mapped(r0), last=r0 + rows >= h),
-                           starts, threads())  # fmt: skip
-        write_png_blocks(png, (h, w, 4), blocks, dpi=dpi)
-        return h, w
     chunks = (tuple(min(rows, h - r0) for r0 in starts), (w,))
-    with cog_target(cog, (h, w, 4), chunks, dem=d, overview_png=overview_png,
-                    overview_size=overview_size) as sink:  # fmt: skip
+    target = nullcontext() if cog is None else cog_target(
+        cog, (h, w, 4), chunks, dem=d, overview_png=overview_png, overview_size=overview_size,
+    )  # fmt: skip
+    with target as sink:
 
-        def both(r0: int) -> tuple[bytes, int, int] | None:
+        def encode(r0: int) -> tuple[bytes, int, int] | None:
             rgba = mapped(r0)
-            sink.encode(rgba, r0, 0)  # the COG's tiles, deflated here
+            if sink is not None:
+                sink.encode(rgba, r0, 0)  # the COG's tiles, deflated here
             return None if png is None else encode_png_rows(rgba, last=r0 + rows >= h)
 
-        encoded = _in_order(both, starts, threads())
+        encoded = _in_order(encode, starts, threads())
         if png is None:
             for _ in encoded:
                 pass
