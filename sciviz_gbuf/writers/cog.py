@@ -223,7 +223,8 @@ def write_cog(
 def _cog_paths(
     path: str | os.PathLike, overview_png: str | os.PathLike | None, overview_size: int
 ) -> tuple[Path, Path | None]:
-    """The checked COG path and preview path (None), and ``overview_size``."""
+    """The checked COG path and preview path (None without a preview); ``overview_size``
+    is checked too."""
     out = _tif_path(path)
     png = None if overview_png is None else _png_path(overview_png)
     if isinstance(overview_size, bool) or not isinstance(overview_size, (int, np.integer)):
