@@ -23,6 +23,7 @@ _EXPORTS = {
     "CameraInfo": "core.camera",
     "CaptureSession": "core.capture",
     "capture": "core.capture",
+    "clear_capture_cache": "core.capture",
     "GBuffer": "core.gbuffer",
     "InputError": "errors",
     "OutputError": "errors",
@@ -65,6 +66,7 @@ __all__ = [
     "__version__",
     "birdseye_map",
     "capture",
+    "clear_capture_cache",
     "contour_labels",
     "ct_enhance",
     "edge_strokes",
@@ -87,7 +89,7 @@ lazy_exports(__name__, _EXPORTS, _SUBMODULES)
 
 if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerly
     from .core.camera import CameraInfo
-    from .core.capture import CaptureSession, capture
+    from .core.capture import CaptureSession, capture, clear_capture_cache
     from .core.gbuffer import GBuffer
     from .errors import InputError, OutputError, RenderError, SciVizGBufError
     from .filters.strokes import Stroke, edge_strokes, vectorize

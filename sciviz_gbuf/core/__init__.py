@@ -16,6 +16,7 @@ _EXPORTS = {
     "CameraInfo": "camera",
     "CaptureSession": "capture",
     "capture": "capture",
+    "clear_capture_cache": "capture",
     "gbuffer_from_zbuffer": "frame",
     "read_zbuffer": "frame",
     "framed_camera": "framing",
@@ -34,6 +35,7 @@ __all__ = [
     "GBuffer",
     "capture",
     "check_gbuffer",
+    "clear_capture_cache",
     "framed_camera",
     "gbuffer_from_zbuffer",
     "isosurface",
@@ -47,7 +49,7 @@ lazy_exports(__name__, _EXPORTS)
 
 if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerly
     from .camera import VIEWS, CameraInfo
-    from .capture import CaptureSession, capture
+    from .capture import CaptureSession, capture, clear_capture_cache
     from .frame import gbuffer_from_zbuffer, read_zbuffer
     from .framing import framed_camera, named_view_camera, oblique_camera, terrain_birdseye_camera
     from .gbuffer import GBuffer, check_gbuffer

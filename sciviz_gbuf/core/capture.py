@@ -10,7 +10,10 @@ to float32, from a single render however many channels are asked for.
 
 from __future__ import annotations
 
+import atexit
+import threading
 from collections.abc import Sequence
+from dataclasses import dataclass, field
 
 import numpy as np
 from vtkmodules.vtkRenderingCore import vtkCamera
@@ -24,7 +27,7 @@ from ._render import IdRenderer
 from .camera import VIEWS, CameraInfo
 from .framing import check_up, default_up, named_view_camera
 from .gbuffer import GBuffer
-from .scene import Surface, collect_surfaces, is_plotter, scene_items
+from .scene import Surface, collect_surfaces, forget_prepared, is_plotter, scene_items
 
 __all__ = [
     "BYTES_PER_LAYER",
@@ -38,6 +41,7 @@ __all__ = [
     "check_layers",
     "check_scalars",
     "check_window_size",
+    "clear_capture_cache",
     "resolve_camera",
 ]
 
@@ -358,6 +362,76 @@ def check_layers(layers: object, pixels: int) -> int:
     return n
 
 
+@dataclass
+class _SceneEntry:
+    """What a capture keeps of one scene's geometry: its merged triangle soup, the offscreen
+    window with that soup uploaded and the framings of its named views."""
+
+    arrays: tuple[np.ndarray, ...]
+    merged: tuple[np.ndarray, ...]
+    renderer: IdRenderer | None = None
+    framings: dict[tuple, tuple] = field(default_factory=dict)
+
+    def matches(self, arrays: tuple[np.ndarray, ...]) -> bool:
+        # identity, not ids: the entry holds the arrays, so none of them can be freed and
+        # its id reused while the entry exists
+        return len(arrays) == len(self.arrays) and all(
+            a is b for a, b in zip(arrays, self.arrays, strict=True)
+        )
+
+    def close(self) -> None:
+        if self.renderer is not None:
+            self.renderer.close()
+            self.renderer = None
+
+
+class _SceneCache:
+    """The last captured scene's :class:`_SceneEntry`, so a re-capture of an unchanged scene
+    (the prepared surfaces are the same objects, :func:`.scene.collect_surfaces`) uploads no
+    geometry and opens no window. One entry: a session takes it while it captures (no two
+    sessions share a window) and gives its own back when it closes."""
+
+    def __init__(self) -> None:
+        self._entry: _SceneEntry | None = None
+        self._lock = threading.Lock()
+
+    def take(self, arrays: tuple[np.ndarray, ...]) -> _SceneEntry | None:
+        with self._lock:
+            entry = self._entry
+            if entry is not None and entry.matches(arrays):
+                self._entry = None
+                return entry
+        return None
+
+    def give(self, entry: _SceneEntry) -> None:
+        with self._lock:
+            old, self._entry = self._entry, entry
+        if old is not None and old is not entry:
+            old.close()
+
+    def clear(self) -> None:
+        with self._lock:
+            old, self._entry = self._entry, None
+        if old is not None:
+            old.close()
+
+
+_SCENES = _SceneCache()
+atexit.register(_SCENES.clear)  # release the kept GL context before VTK's own teardown
+
+
+def clear_capture_cache() -> None:
+    """Forget what captures keep between calls: the prepared surfaces of the datasets captured
+    last (:data:`.scene.PREPARED_ENTRIES` of them) and the offscreen window of the last scene,
+    with its geometry. Captures after this prepare and upload afresh; nothing else changes."""
+    _SCENES.clear()
+    forget_prepared()
+
+
+def _surface_arrays(surfaces: list[Surface]) -> tuple[np.ndarray, ...]:
+    return tuple(a for s in surfaces for a in (s.points, s.triangles, s.normals, s.cell_ids))
+
+
 class CaptureSession:
     """Captures of one scene from any number of cameras, keeping what does not depend on the
     camera: the scene's surfaces (triangulated, normals split at ``feature_angle``), their
@@ -397,8 +471,12 @@ class CaptureSession:
                     f"available: {avail}"
                 )
         self.surfaces = surfaces
-        self._merged = _merge(surfaces)
-        self._renderer: IdRenderer | None = None
+        arrays = _surface_arrays(surfaces)
+        entry = _SCENES.take(arrays)
+        if entry is None:
+            entry = _SceneEntry(arrays=arrays, merged=_merge(surfaces))
+        self._entry = entry
+        self._merged = entry.merged
         self._reused: tuple[np.ndarray, ...] | None = None
         # The world up of named views, from the scene (its data's file conventions).
         self._default_up: str | None = None
@@ -410,10 +488,14 @@ class CaptureSession:
         self.close()
 
     def close(self) -> None:
-        """Release the offscreen window (the session can still capture: it opens a new one)."""
-        if self._renderer is not None:
-            self._renderer.close()
-            self._renderer = None
+        """Hand the offscreen window back (the session can still capture: it opens a new one).
+
+        The window, with the scene's geometry uploaded, is kept for the next capture of the
+        same unchanged scene (one scene is kept; :func:`clear_capture_cache` releases it)."""
+        entry = self._entry
+        if entry.renderer is not None:
+            _SCENES.give(entry)
+            self._entry = _SceneEntry(arrays=entry.arrays, merged=entry.merged)
 
     def capture(
         self,
@@ -474,19 +556,25 @@ class CaptureSession:
         size = (window[0] * supersample, window[1] * supersample)
         points, _normals, triangles, *_ = self._merged
         cam, reset = resolve_camera(camera, scene, parallel_projection)
-        if self._renderer is None:
-            self._renderer = IdRenderer(points, triangles)
-        renderer = self._renderer
+        entry = self._entry
+        if entry.renderer is None:
+            entry.renderer = IdRenderer(points, triangles)
+        renderer = entry.renderer
         renderer.window.SetSize(*size)
         if reset is not None:
             if up is None:
                 if self._default_up is None:
                     self._default_up = default_up([d for _, d, _ in scene_items(scene)])
                 up = self._default_up
-            pos, foc, vup = named_view_camera(
-                points, reset, aspect=size[0] / size[1], up=up,
-                view_angle=cam.GetViewAngle(), parallel=bool(cam.GetParallelProjection()),
-            )  # fmt: skip
+            # the framing is a fit over every point: remembered with the scene's geometry
+            frame_key = (reset, size, up, cam.GetViewAngle(), bool(cam.GetParallelProjection()))
+            framed = entry.framings.get(frame_key)
+            if framed is None:
+                framed = entry.framings[frame_key] = named_view_camera(
+                    points, reset, aspect=size[0] / size[1], up=up,
+                    view_angle=cam.GetViewAngle(), parallel=bool(cam.GetParallelProjection()),
+                )  # fmt: skip
+            pos, foc, vup = framed
             cam.SetPosition(*pos)
             cam.SetFocalPoint(*foc)
             cam.SetViewUp(*vup)

@@ -8,9 +8,11 @@ so every G-buffer value can be traced to the data it came from.
 
 from __future__ import annotations
 
+import threading
+from collections import OrderedDict
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pyvista as pv
@@ -21,12 +23,15 @@ from vtkmodules.vtkFiltersGeometry import vtkDataSetSurfaceFilter, vtkGeometryFi
 
 from ..errors import InputError
 from ..readers.mesh import check_mesh, quiet_vtk, source_name
+from . import _scene_kernels
 
 __all__ = [
     "MAX_COORDINATE",
     "MIN_COORDINATE_STEPS",
+    "PREPARED_ENTRIES",
     "Surface",
     "collect_surfaces",
+    "forget_prepared",
     "is_plotter",
     "make_surface",
     "scene_items",
@@ -216,102 +221,95 @@ def _compute_normals(poly: pv.PolyData, feature_angle: float) -> pv.PolyData:
     return pv.wrap(alg.GetOutput())
 
 
-def _face_normals(points: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Unit face normals (zero for zero-area triangles) and twice the triangle areas."""
-    pts = np.asarray(points, dtype=np.float64)
-    a, b, c = (pts[triangles[:, k]] for k in range(3))
-    cross = np.cross(b - a, c - a)
-    area2 = np.linalg.norm(cross, axis=1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        unit = np.where(area2[:, None] > 0, cross / area2[:, None], 0.0)
-    return unit, area2
-
-
 def split_normals(
     poly: pv.PolyData, normals: np.ndarray, triangles: np.ndarray, feature_angle: float
 ) -> tuple[pv.PolyData, np.ndarray, np.ndarray]:
-    """Split point normals that disagree with a face by more than ``feature_angle`` degrees.
+    """Fit a file's point normals to its faces: stale ones replaced, shared ones split where
+    they disagree with a face by more than ``feature_angle`` degrees.
 
-    A file's point normals are often averaged across the sharp edges of a CAD part (every
-    point is shared by all faces it touches), so a flat face near an edge would shade with
-    normals tilted towards its neighbour: streaks. Each corner whose point normal makes an
-    angle of more than ``feature_angle`` with its triangle's normal (orientation ignored:
-    some files wind the other way) gets a point of its own, with the area-weighted average
-    of the normals of the triangles around the point that lie within ``feature_angle`` of
-    its own (the smoothing ``vtkPolyDataNormals`` does with splitting on): the faces of a
-    crease shade flat, a smooth region beside it stays smooth. Agreeing corners keep the
-    file's normals. Point data of a split point is copied to its new points.
+    - **Stale normals.** At a smooth point (every two triangles around it within
+      ``feature_angle`` of each other) a normal more than half the feature angle away from
+      the area-weighted mean of its faces no longer fits them (the points were moved after
+      the normals were computed: ``mesh.points = ...`` and plot). It is replaced by that
+      mean, on its own side.
+    - **Normals shared across sharp edges.** A file's point normals are often averaged
+      across the sharp edges of a CAD part (every point is shared by all faces it touches),
+      so a flat face near an edge would shade with normals tilted towards its neighbour:
+      streaks. Each corner whose point is shared across an edge sharper than
+      ``feature_angle``, or whose normal makes an angle of more than ``feature_angle`` with
+      its triangle's normal (orientation ignored: some files wind the other way), gets a
+      point of its own, with the area-weighted average of the normals of the triangles
+      around the point that lie within ``feature_angle`` of its own (the smoothing
+      ``vtkPolyDataNormals`` does with splitting on): the faces of a crease shade flat, a
+      smooth region beside it stays smooth. Point data of a split point is copied to its new
+      points.
 
-    Returns ``(poly, normals, triangles)``, the inputs themselves when nothing disagrees.
+    Agreeing corners keep the file's normals. Compiled (:mod:`._scene_kernels`; the numpy
+    statement of the method is ``tests/helpers/split_reference.py``). Returns ``(poly,
+    normals, triangles)``, the inputs themselves when nothing changes; ``poly`` is never
+    modified.
     """
     if feature_angle >= 180.0 or triangles.shape[0] == 0:
         return poly, normals, triangles
-    face, area2 = _face_normals(poly.points, triangles)
-    cos_limit = np.cos(np.radians(feature_angle))
-    unit = normals / np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-300)
-    # Cheap exit first (smooth surfaces, e.g. isosurfaces, are millions of triangles): if
-    # every corner's normal lies within half the feature angle of its face, two faces that
-    # share a point are within the feature angle of each other (the angles add), so no corner
-    # is shared across a sharp edge and none disagrees: nothing to split.
-    flat_tri = np.repeat(np.arange(triangles.shape[0]), 3)
-    corner_cos = np.abs(np.einsum("ij,ij->i", unit[triangles.ravel()], face[flat_tri]))
-    if np.all((corner_cos >= np.cos(np.radians(feature_angle / 2.0))) | (area2[flat_tri] <= 0)):
+    points = np.ascontiguousarray(poly.points, dtype=np.float64)
+    tris = np.ascontiguousarray(triangles, dtype=np.int64)
+    m, n = tris.shape[0], points.shape[0]
+    face = np.empty((m, 3))
+    area2 = np.empty(m)
+    _scene_kernels.face_normals_into(points, tris, face, area2)
+    cos_limit = float(np.cos(np.radians(feature_angle)))
+    cos_half = float(np.cos(np.radians(feature_angle / 2.0)))
+    nrm64 = np.asarray(normals, dtype=np.float64)
+    unit = nrm64 / np.maximum(np.linalg.norm(nrm64, axis=1, keepdims=True), 1e-300)
+    start = np.empty(n + 1, np.int64)
+    adj = np.empty(3 * m, np.int64)
+    if not _scene_kernels.corner_adjacency(tris, n, start, adj):
+        raise InputError("split_normals: a triangle names a point the surface does not have")
+    fitted = unit.copy()
+    sharp = np.empty(n, np.bool_)
+    n_stale = _scene_kernels.stale_point_normals(
+        unit, face, area2, start, adj, cos_limit, cos_half, sharp, fitted
+    )
+    bad = np.empty(3 * m, np.bool_)
+    n_bad = _scene_kernels.split_corners(
+        fitted, face, area2, tris, start, adj, cos_limit, sharp, bad
+    )
+    if n_stale == 0 and n_bad == 0:
         return poly, normals, triangles
-    # Triangles around each point (CSR), then every (corner, triangle around its point) pair.
-    flat = triangles.ravel()
-    order = np.argsort(flat, kind="stable")
-    start = np.searchsorted(flat[order], np.arange(poly.n_points + 1))
-    count = start[flat + 1] - start[flat]
-    corner = np.repeat(np.arange(flat.size), count)
-    offset = np.arange(corner.size) - np.repeat(np.cumsum(count) - count, count)
-    other = order[start[flat][corner] + offset] // 3
-    own = corner // 3
-    dots = np.einsum("ij,ij->i", face[own], face[other])
-    near = (np.abs(dots) >= cos_limit) & (area2[other] > 0)
-    # A corner is split when its point is shared across a sharp edge (a face around it turns
-    # by more than the feature angle from the corner's face) or its normal disagrees with
-    # its face by more than the feature angle.
-    across = np.zeros(flat.size, dtype=bool)
-    across[corner[~near & (area2[other] > 0)]] = True
-    corner_dot = np.abs(np.einsum("ij,ij->i", unit[flat], face[np.arange(flat.size) // 3]))
-    bad = (across | (corner_dot < cos_limit)) & (area2[np.arange(flat.size) // 3] > 0)
-    if not bad.any():
-        return poly, normals, triangles
-    index = np.full(flat.size, -1)
-    index[bad] = np.arange(int(bad.sum()))
-    sel = bad[corner]
-    corner, other, dots, near = index[corner[sel]], other[sel], dots[sel], near[sel]
-    bt, bk = np.divmod(np.flatnonzero(bad), 3)
-    bp = triangles[bt, bk]
-    # Neighbours wound the other way (an inconsistent file) count by orientation-free angle.
-    sign = np.where(dots < 0, -1.0, 1.0)
-    acc = np.zeros((bp.size, 3))
-    np.add.at(acc, corner[near], (face[other] * (area2[other] * sign)[:, None])[near])
-    length = np.linalg.norm(acc, axis=1, keepdims=True)
-    new_normals = np.where(length > 0, acc / np.maximum(length, 1e-300), face[bt])
-    # Keep the file's orientation: turn each new normal to the side of the one it replaces.
-    flip = np.einsum("ij,ij->i", new_normals, unit[bp]) < 0
-    new_normals[flip] *= -1.0
+    if n_stale:
+        normals = fitted.astype(normals.dtype)  # the unit file normals where not replaced
+    name = poly.GetPointData().GetNormals()
+    normals_name = name.GetName() if name is not None and name.GetName() else "Normals"
+    if n_bad == 0:  # only stale normals replaced: the same points and triangles
+        out = poly.copy(deep=False)
+        out.point_data[normals_name] = normals
+        out.point_data.active_normals_name = normals_name  # type: ignore[attr-defined]
+        return out, normals, triangles
+    corners = np.flatnonzero(bad)
+    new_normals = np.empty((corners.size, 3))
+    _scene_kernels.split_normals_into(
+        fitted, face, area2, tris, start, adj, cos_limit, corners, new_normals
+    )
+    bt, bk = np.divmod(corners, 3)
+    bp = tris[bt, bk]
     n0 = poly.n_points
     out = pv.PolyData()
     out.points = np.concatenate([np.asarray(poly.points), np.asarray(poly.points)[bp]])
-    tris = triangles.copy()
-    tris[bt, bk] = n0 + np.arange(bp.size)
-    out.faces = np.hstack([np.full((tris.shape[0], 1), 3), tris]).ravel()
+    new_tris = tris.copy()
+    new_tris[bt, bk] = n0 + np.arange(bp.size)
+    out.faces = np.hstack([np.full((new_tris.shape[0], 1), 3), new_tris]).ravel()
     for key in poly.point_data.keys():
         arr = np.asarray(poly.point_data[key])
-        out.point_data[key] = np.concatenate([arr, arr[bp]])
+        out.point_data[key] = np.concatenate([arr, arr[bp]]) if bp.size else arr.copy()
     for key in poly.cell_data.keys():
         out.cell_data[key] = np.asarray(poly.cell_data[key])
     all_normals = np.concatenate([normals, new_normals.astype(normals.dtype)])
-    name = poly.GetPointData().GetNormals()
-    key = name.GetName() if name is not None and name.GetName() else "Normals"
-    out.point_data[key] = all_normals
-    out.point_data.active_normals_name = key  # type: ignore[attr-defined]
+    out.point_data[normals_name] = all_normals
+    out.point_data.active_normals_name = normals_name  # type: ignore[attr-defined]
     tc = poly.GetPointData().GetTCoords()
     if tc is not None and tc.GetName():
         out.GetPointData().SetActiveTCoords(tc.GetName())
-    return out, all_normals, tris
+    return out, all_normals, new_tris
 
 
 def _empty_surface(name: str) -> Surface:
@@ -328,33 +326,41 @@ def _empty_surface(name: str) -> Surface:
     )
 
 
-def _check_area(name: str, points: np.ndarray, triangles: np.ndarray) -> None:
-    """At least one triangle with an area, else there is nothing to draw."""
-    pts = np.asarray(points, dtype=np.float64)
-    a, b, c = (pts[triangles[:, k]] for k in range(3))
-    area2 = np.linalg.norm(np.cross(b - a, c - a), axis=1)
-    longest = np.max([np.linalg.norm(b - a, axis=1), np.linalg.norm(c - b, axis=1),
-                      np.linalg.norm(a - c, axis=1)], axis=0)  # fmt: skip
-    extent = float(np.ptp(pts, axis=0).max()) if len(pts) else 0.0
+def _check_area(
+    name: str, points: np.ndarray, triangles: np.ndarray, bounds: tuple[np.ndarray, ...]
+) -> None:
+    """At least one triangle with an area, else there is nothing to draw. ``bounds``: the
+    float64 points, their per-axis minimum and maximum and largest magnitude
+    (:func:`_bounds`)."""
+    pts, lo, hi, far = bounds
+    extent = float((hi - lo).max()) if len(pts) else 0.0
     # A triangle counts if its height is above the rounding of its coordinates, relative to
     # the object's size: a 1e-9 wide part is drawn, float32 points on one line are not.
     rounding = np.finfo(points.dtype).eps if points.dtype == np.float32 else 1e-15
-    tol = 1e-6 * extent + 8 * rounding * float(np.abs(pts).max(initial=0.0))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        height = np.where(longest > 0, area2 / longest, 0.0)
-    if extent == 0.0 or not (height > tol).any():
+    tol = 1e-6 * extent + 8 * rounding * float(far)
+    tris = np.ascontiguousarray(triangles, dtype=np.int64)
+    height = _scene_kernels.triangle_heights(pts, tris) if len(pts) else 0.0
+    if extent == 0.0 or not height > tol:
         raise InputError(
             f"{name}: all {len(triangles)} triangles have zero area (their points coincide or "
             "lie on one line): nothing to draw"
         )
 
 
-def _check_resolution(name: str, points: np.ndarray) -> None:
+def _bounds(points: np.ndarray) -> tuple[np.ndarray, ...]:
+    """``(float64 points, per-axis minimum, maximum, largest magnitude)`` in one pass."""
+    pts = np.ascontiguousarray(points, dtype=np.float64)
+    lo, hi = np.zeros(3), np.zeros(3)
+    far = _scene_kernels.point_bounds(pts, lo, hi) if len(pts) else 0.0
+    return pts, lo, hi, np.float64(far)
+
+
+def _check_resolution(name: str, points: np.ndarray, bounds: tuple[np.ndarray, ...]) -> None:
     """Refuse an object whose stored coordinates are too coarse for its size where it is."""
-    if not np.issubdtype(points.dtype, np.floating):
+    if not np.issubdtype(points.dtype, np.floating) or len(points) == 0:
         return
-    lo, hi = points.min(axis=0), points.max(axis=0)
-    step = float(np.finfo(points.dtype).eps) * float(np.abs(points).max())
+    _, lo, hi, far = bounds  # float64 of the stored values: the same extremes
+    step = float(np.finfo(points.dtype).eps) * float(far)
     extent = float((hi - lo).max())
     if extent < MIN_COORDINATE_STEPS * step:
         raise InputError(
@@ -375,10 +381,60 @@ def make_surface(
         If ``data`` has bad connectivity or points, or no surface cells (only lines or
         vertices), or only zero-area triangles.
     """
-    surface = _make_surface(name, data, transform, feature_angle)
+    surface = _prepared_surface(name, data, transform, feature_angle)
     if surface is None:
         raise InputError(f"{name}: the dataset has no surface (polygon) cells to capture")
     return surface
+
+
+#: Prepared surfaces of the datasets captured last (surface extraction, triangulation, the
+#: checks, the fitted normals), so a capture of an unchanged scene does no mesh work. Keyed by
+#: the VTK object's address; valid while the dataset's VTK modification time (the largest of
+#: its points', cells', point and cell data's and its own) and the options are the same. A new
+#: object at a freed address has a later modification time (VTK's clock only runs forward), so
+#: an entry never answers for another dataset.
+_PREPARED: OrderedDict[str, tuple[tuple, Surface | None]] = OrderedDict()
+_PREPARED_LOCK = threading.Lock()
+#: Datasets remembered; the oldest is forgotten first (each entry holds about a copy of its
+#: dataset's points, triangles and normals).
+PREPARED_ENTRIES = 8
+
+
+def _prepared_surface(
+    name: str, data: object, transform: np.ndarray | None, feature_angle: float
+) -> Surface | None:
+    """:func:`_make_surface`, remembered per dataset while the dataset is unchanged.
+
+    A dataset changed through VTK or PyVista (``mesh.points = ...``, ``mesh.points[i] = ...``,
+    a new array, ``Modified()``) is prepared afresh; one written through a raw numpy view of
+    its memory without ``Modified()`` is not seen (VTK's own renderer does not see it either).
+    """
+    if not isinstance(data, vtkDataSet):
+        return _make_surface(name, data, transform, feature_angle)
+    key = str(data.__this__)
+    stamp = (
+        int(data.GetMTime()),
+        float(feature_angle),
+        None if transform is None else np.asarray(transform, dtype=np.float64).tobytes(),
+    )
+    with _PREPARED_LOCK:
+        hit = _PREPARED.get(key)
+        if hit is not None and hit[0] == stamp:
+            _PREPARED.move_to_end(key)
+            return None if hit[1] is None else replace(hit[1], name=name)
+    surface = _make_surface(name, data, transform, feature_angle)
+    with _PREPARED_LOCK:
+        _PREPARED[key] = (stamp, surface)
+        _PREPARED.move_to_end(key)
+        while len(_PREPARED) > PREPARED_ENTRIES:
+            _PREPARED.popitem(last=False)
+    return surface
+
+
+def forget_prepared() -> None:
+    """Drop every remembered prepared surface (their memory; the next capture prepares anew)."""
+    with _PREPARED_LOCK:
+        _PREPARED.clear()
 
 
 def _make_surface(
@@ -393,8 +449,10 @@ def _make_surface(
         return None
     tris = poly.GetPolys()
     conn = np.asarray(pv.convert_array(tris.GetConnectivityArray()), dtype=np.int64)
-    _check_area(name, np.asarray(poly.points), conn.reshape(-1, 3))
-    _check_resolution(name, np.asarray(poly.points))
+    raw = np.asarray(poly.points)
+    bounds = _bounds(raw)
+    _check_area(name, raw, conn.reshape(-1, 3), bounds)
+    _check_resolution(name, raw, bounds)
     normals = _existing_normals(poly)
     if normals is None:
         with quiet_vtk():
@@ -448,7 +506,7 @@ def collect_surfaces(scene: object, *, feature_angle: float = 30.0) -> list[Surf
     coordinates the renderer cannot resolve.
     """
     items = scene_items(scene)
-    surfaces = [_make_surface(n, d, t, feature_angle) for n, d, t in items]
+    surfaces = [_prepared_surface(n, d, t, feature_angle) for n, d, t in items]
     if all(s is None for s in surfaces):
         if len(items) == 1:
             raise InputError(

@@ -140,7 +140,25 @@ __all__ = [
     "write_vector",
 ]
 
-lazy_exports(__name__, _EXPORTS)
+# the recipe modules themselves, so ``sg.recipes.medical.ct_gbuffer`` works in a fresh interpreter
+_SUBMODULES = (
+    "birdseye",
+    "contour_figures",
+    "furniture",
+    "labels",
+    "layout",
+    "map_options",
+    "medical",
+    "npr",
+    "saito1990",
+    "surface",
+    "terrain",
+    "terrain_chunked",
+    "tiles",
+    "vector",
+)
+
+lazy_exports(__name__, _EXPORTS, _SUBMODULES)
 
 if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerly
     from ..core.framing import (
