@@ -197,6 +197,8 @@ def smooth_strip(
     calling thread only; ``inner``: with ``serial``, only the cells ``(r0, r1, c0, c1)``
     (rows, columns; the others are read), written into the arrays ``into`` if given."""
     z64 = np.ascontiguousarray(z, dtype=np.float64)
+    if serial and inner is not None and FUSED_ROUTE and _fused_ok(valid, inner):
+        return _smooth_fused(z64, inner, interval, into)
     n = z.size
     nfit = 3 * (len(SIGMAS) - 1)
     if work is None:
@@ -224,6 +226,59 @@ def smooth_strip(
         sigma_max=SIGMA_MAX, sigma_grad=SIGMA_GRADIENT, displace=DISPLACE_MAX, serial=serial,
         inner=(r0, r1, c0, c1), out=out, grad=grad,
     )  # fmt: skip
+
+
+#: Columns the fused route fits at a time: its rings of x-moments (8 + 16 + 32 rows of two
+#: float64 moments) then take 230 KB, within a core's second-level cache.
+FUSED_COLS = 256
+#: Whether tiles of full windows take the fused route (benchmarks set it False to time the
+#: separate kernels, the route of every other tile, in the same run).
+FUSED_ROUTE = True
+
+
+def _fused_ok(valid: np.ndarray, inner: tuple[int, int, int, int]) -> bool:
+    """Whether every cell of ``inner`` has its widest window (``SMOOTH_RADIUS`` cells around
+    it, which holds the blend's 3 x 3) inside the array and without nodata: then the fits'
+    mask moments are those of a full window everywhere (:func:`_smooth_fused`)."""
+    r0, r1, c0, c1 = inner
+    r = SMOOTH_RADIUS
+    h, w = valid.shape
+    if r0 - r < 0 or c0 - r < 0 or r1 + r > h or c1 + r > w or r0 >= r1 or c0 >= c1:
+        return False
+    return bool(valid[r0 - r : r1 + r, c0 - r : c1 + r].all())
+
+
+def _smooth_fused(
+    z64: np.ndarray, inner: tuple[int, int, int, int], interval: float,
+    into: tuple[np.ndarray, np.ndarray] | None,
+) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """:func:`smooth_strip` of a tile whose cells all have full windows (:func:`_fused_ok`),
+    by :func:`._smooth_kernels.fused_rows` (the same operations, so the same bits, without
+    the moment and fit planes), ``FUSED_COLS`` columns at a time."""
+    assert SIGMAS == (0.0, 1.0, 2.0, 4.0) and SIGMA_SLOPE == 1.0  # the kernel's widths
+    r0, r1, c0, c1 = inner
+    out, grad = (
+        (np.empty((r1 - r0, c1 - c0), np.float32), np.empty((r1 - r0, c1 - c0), np.float32))
+        if into is None
+        else into
+    )
+    taps = [_kernels(s) for s in SIGMAS[1:]]
+    full = np.stack([_sk.full_moments(*k) for k in taps])
+    s4 = np.array([1e-3 * s**4 for s in SIGMAS[1:]])
+    n = min(FUSED_COLS, c1 - c0)
+    for a in range(c0, c1, n):
+        b = min(a + n, c1)
+        k = b - a
+        if a == c0 or k != n:  # contiguous rows, for the vector loops
+            rings = [np.empty((m, 2, k)) for m in (8, 16, 32)]  # >= 2 r + 1 rows of each
+            acc, fit = np.empty((3, k)), np.empty((9, k))
+        _sk.fused_rows(z64, r0, r1, a, b, taps[0][0], taps[0][1], taps[1][0], taps[1][1],
+                       taps[2][0], taps[2][1], full, s4, float(interval), SIGMA_PER_PX,
+                       STEEP_SPACING, SIGMA_MAX, SIGMA_GRADIENT, DISPLACE_MAX,
+                       DISPLACE_MAX / math.sqrt(2.0), out[:, a - c0 : b - c0],
+                       grad[:, a - c0 : b - c0], rings[0], rings[1], rings[2], acc,
+                       fit)  # fmt: skip
+    return out, grad
 
 
 def _widest_sigma(b: np.ndarray, c: np.ndarray, valid: np.ndarray, interval: float) -> float:

@@ -11,6 +11,10 @@ them. Taps outside the grid count as no data (``correlate1d``'s ``mode="constant
 so a cell's fit depends only on its window, as before: chunks of a grid agree with the whole.
 The sums are taken in another order than scipy's: the fits agree with the reference within
 float64 rounding (tested).
+
+A tile whose cells all have full windows (most of a DEM) takes :func:`fused_rows`: the same
+sums and blend in one pass of rows, the x-moments in rings of rows and the fits of a row in
+nine rows, so no plane of moments or fits is written and read back (the same bits, tested).
 """
 
 from __future__ import annotations
@@ -20,7 +24,7 @@ from numba import njit
 
 from ..core.bands import run_bands
 
-__all__ = ["blend_kernel", "least_gradient", "local_linear_kernel"]
+__all__ = ["blend_kernel", "full_moments", "fused_rows", "least_gradient", "local_linear_kernel"]
 
 
 def local_linear_kernel(
@@ -531,3 +535,143 @@ def least_gradient(b: np.ndarray, c: np.ndarray, valid: np.ndarray) -> float:
             q = b[i, j] * b[i, j] + c[i, j] * c[i, j]
             best = q if valid[i, j] and q < best else best
     return np.sqrt(best)
+
+
+# ------------------------------------------------ the fused route of a tile without nodata
+def full_moments(g: np.ndarray, gd: np.ndarray, gdd: np.ndarray) -> np.ndarray:
+    """The six mask moments ``m0 my myy mx mxy mxx`` of a window inside the grid without
+    nodata, as :func:`local_linear_kernel` takes them (the x-sums of a row of ones, then the
+    y-sums in :func:`_v_taps`' order: the same bits)."""
+    r = g.shape[0] // 2
+    w = 2 * r + 2
+    full_x = np.empty((5, 1, w), np.float64)
+    _x_rows(0, 1, np.zeros((1, w)), np.ones((1, w), np.bool_), g, gd, gdd, full_x,
+            np.zeros((3, w)), np.zeros(1, np.bool_), 0, w, np.empty(w),
+            np.empty(w + 2 * r))  # fmt: skip
+    x0, x1, x2 = (float(full_x[f, 0, r]) for f in range(3))
+    m = [0.0] * 6
+    for t in range(2 * r + 1):
+        m[0] += float(g[t]) * x0
+        m[1] += float(gd[t]) * x0
+        m[2] += float(gdd[t]) * x0
+        m[3] += float(g[t]) * x1
+        m[4] += float(gd[t]) * x1
+        m[5] += float(g[t]) * x2
+    return np.array(m, np.float64)
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _x_moments(zrow: np.ndarray, c0: int, c1: int, g: np.ndarray, gd: np.ndarray,
+               o0: np.ndarray, o1: np.ndarray) -> None:  # fmt: skip
+    """The height x-moments ``o0 = sum g z``, ``o1 = sum g d z`` of columns ``c0 .. c1`` of
+    one row whose taps all lie inside it: :func:`_x_rows`' sums, in its order and grouping
+    of four taps (the same bits)."""
+    r = g.shape[0] // 2
+    n = c1 - c0
+    for j in range(n):
+        o0[j] = 0.0
+        o1[j] = 0.0
+    t = 0
+    while t < 2 * r + 1:
+        x = c0 + t - r
+        if t + 3 < 2 * r + 1:
+            _taps2x4(o0, o1, zrow[x : x + n], zrow[x + 1 : x + 1 + n], zrow[x + 2 : x + 2 + n],
+                     zrow[x + 3 : x + 3 + n], g[t], g[t + 1], g[t + 2], g[t + 3], gd[t],
+                     gd[t + 1], gd[t + 2], gd[t + 3])  # fmt: skip
+            t += 4
+        else:
+            _taps2(o0, o1, zrow[x : x + n], g[t], gd[t])
+            t += 1
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _y_fit(ring: np.ndarray, i: int, g: np.ndarray, gd: np.ndarray, full: np.ndarray,
+           s4: float, acc: np.ndarray, a: np.ndarray, b: np.ndarray,
+           c: np.ndarray) -> None:  # fmt: skip
+    """The plane of every cell of row ``i`` from the x-moment rows in ``ring`` (slot ``row
+    % len(ring)``): :func:`_y_rows`' sums of a full window, in its order and grouping, and
+    :func:`_solve_full` (the same bits)."""
+    r = g.shape[0] // 2
+    m = ring.shape[0]
+    n = a.shape[0]
+    for f in range(3):
+        for j in range(n):
+            acc[f, j] = 0.0
+    t = 0
+    while t < 2 * r + 1:
+        row = i + t - r
+        if t + 3 < 2 * r + 1:
+            _ztaps4(acc[0], acc[1], acc[2], ring[row % m, 0], ring[(row + 1) % m, 0],
+                    ring[(row + 2) % m, 0], ring[(row + 3) % m, 0], ring[row % m, 1],
+                    ring[(row + 1) % m, 1], ring[(row + 2) % m, 1], ring[(row + 3) % m, 1],
+                    g[t], g[t + 1], g[t + 2], g[t + 3], gd[t], gd[t + 1], gd[t + 2],
+                    gd[t + 3])  # fmt: skip
+            t += 4
+        else:
+            _taps2(acc[0], acc[1], ring[row % m, 0], g[t], gd[t])
+            _taps1(acc[2], ring[row % m, 1], g[t])
+            t += 1
+    _solve_full(acc[0], acc[1], acc[2], full, s4, a, b, c)
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def fused_rows(
+    z: np.ndarray, r0: int, r1: int, c0: int, c1: int, g1: np.ndarray, gd1: np.ndarray,
+    g2: np.ndarray, gd2: np.ndarray, g4: np.ndarray, gd4: np.ndarray, full: np.ndarray,
+    s4: np.ndarray, interval: float, per_px: float, steep: float, sigma_max: float,
+    sigma_grad: float, k_axis: float, k_diag: float, out: np.ndarray, grad: np.ndarray,
+    ring1: np.ndarray, ring2: np.ndarray, ring4: np.ndarray, acc: np.ndarray,
+    fit: np.ndarray,
+) -> None:  # fmt: skip
+    """:func:`local_linear_kernel` at the widths 1, 2 and 4, then :func:`blend_kernel`, of
+    the cells ``(r0 .. r1, c0 .. c1)`` of ``z`` whose windows at width 4 lie inside ``z``
+    and hold no nodata (the caller checks), into ``out`` and ``grad`` (that shape): the same
+    operations on the same values, so the same bits, in one pass of rows.
+
+    The separate kernels write the x-moments of the tile (five float64 planes) and nine fit
+    planes, then read them back: memory traffic, not the sums, bounded them. Here the
+    x-moments of a row are kept in rings of rows (``ring1/2/4``: at least ``2 r + 1`` rows
+    of each width's ``2 x n`` moments), each row's three fits in ``fit`` (9 x n), and the
+    blend runs as soon as a row is fitted; the wider fits are taken only for rows where a
+    cell asks for them (the width grows as the width-1 slope falls), their x-moments on
+    demand. ``full``: (3, 6) mask moments of each width (:func:`full_moments`); ``s4``:
+    ``1e-3 sigma^4`` of each; ``acc``: (3, n) scratch."""
+    n = c1 - c0
+    r_1 = g1.shape[0] // 2
+    r_2 = g2.shape[0] // 2
+    r_4 = g4.shape[0] // 2
+    m1 = ring1.shape[0]
+    m2 = ring2.shape[0]
+    m4 = ring4.shape[0]
+    for row in range(r0 - r_1, r0 + r_1):
+        _x_moments(z[row], c0, c1, g1, gd1, ring1[row % m1, 0], ring1[row % m1, 1])
+    done2 = r0 - r_2 - 1  # the last row whose width-2 x-moments are in ring2
+    done4 = r0 - r_4 - 1
+    for i in range(r0, r1):
+        row = i + r_1
+        _x_moments(z[row], c0, c1, g1, gd1, ring1[row % m1, 0], ring1[row % m1, 1])
+        _y_fit(ring1, i, g1, gd1, full[0], s4[0], acc, fit[0], fit[1], fit[2])
+        # the widest width a cell of the row asks for: _blend_full's width of the least
+        # gradient (every step from b^2 + c^2 to the width is monotone in IEEE arithmetic,
+        # so this is the largest of the cells' widths, bit for bit)
+        least = np.inf
+        for q in range(n):
+            sq = fit[1, q] * fit[1, q] + fit[2, q] * fit[2, q]
+            least = sq if sq < least else least
+        gm = np.sqrt(least)
+        spacing = interval / gm if gm > 0.0 else np.inf
+        widest = min(max(per_px * (spacing - steep), 0.0), sigma_max)
+        if widest > 1.0:
+            for row in range(max(done2 + 1, i - r_2), i + r_2 + 1):
+                _x_moments(z[row], c0, c1, g2, gd2, ring2[row % m2, 0], ring2[row % m2, 1])
+            done2 = i + r_2
+            _y_fit(ring2, i, g2, gd2, full[1], s4[1], acc, fit[3], fit[4], fit[5])
+        if widest > 2.0:
+            for row in range(max(done4 + 1, i - r_4), i + r_4 + 1):
+                _x_moments(z[row], c0, c1, g4, gd4, ring4[row % m4, 0], ring4[row % m4, 1])
+            done4 = i + r_4
+            _y_fit(ring4, i, g4, gd4, full[2], s4[2], acc, fit[6], fit[7], fit[8])
+        _blend_full(z[i - 1, c0 - 1 : c1 + 1], z[i, c0 - 1 : c1 + 1], z[i + 1, c0 - 1 : c1 + 1],
+                    fit[0], fit[1], fit[2], fit[3], fit[4], fit[5], fit[6], fit[7], fit[8],
+                    interval, per_px, steep, sigma_max, sigma_grad, k_axis, k_diag,
+                    out[i - r0], grad[i - r0])  # fmt: skip

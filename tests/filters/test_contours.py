@@ -680,6 +680,35 @@ def test_smooth_field_by_tiles_equals_one_piece(monkeypatch):
     assert np.nanstd(whole[0] - z) > 0.1  # the smoothing did move heights
 
 
+@pytest.mark.parametrize("interval", [0.05, 3.0, 12.0, 400.0])
+def test_fused_route_equals_the_separate_kernels(interval):
+    """A tile whose windows are all full goes through ``fused_rows`` (the fits of widths 1,
+    2, 4 and the blend in one pass of rows, the wider fits only on rows that ask for them):
+    the same float32 bits as the separate kernels, over steep and flat rows in one tile,
+    an exactly flat stretch, columns beyond FUSED_COLS and a last column block narrower
+    than it."""
+    from sciviz_gbuf.filters import _contour_generalize as G
+
+    rng = np.random.default_rng(5)
+    h, w = 90, G.FUSED_COLS + 77 + 2 * G.SMOOTH_RADIUS
+    z = np.cumsum(np.cumsum(rng.standard_normal((h, w)), 0), 1) * 0.4 + 700
+    z[:, : w // 3] *= 0.05  # gentle ground beside steep ground: rows with and without
+    z[40:47, :] = 700.0  # the wide fits, and a flat stretch
+    z = z.astype(np.float32)
+    valid = np.ones(z.shape, bool)
+    r = G.SMOOTH_RADIUS
+    inner = (r, h - r, r, w - r)
+    assert G._fused_ok(valid, inner)
+    fused = G.smooth_strip(z, valid, interval, serial=True, inner=inner)
+    reference = G.smooth_strip_reference(z, valid, interval)
+    for a, b in zip(fused, reference, strict=True):
+        np.testing.assert_array_equal(a, b[r : h - r, r : w - r])
+    # one nodata cell in a window, or a window over the edge: the separate kernels
+    valid[5, 40] = False
+    assert not G._fused_ok(valid, inner)
+    assert not G._fused_ok(np.ones(z.shape, bool), (r - 1, h - r, r, w - r))
+
+
 @settings(max_examples=60, deadline=None)
 @given(hnp.arrays(np.bool_, st.tuples(st.integers(1, 9), st.integers(1, 11))))
 def test_cut_cells_is_the_dilated_nodata_and_the_edge(valid):
