@@ -156,15 +156,16 @@ def smooth_field(
         return smooth_strip(z, valid, interval)
     out = np.empty(z.shape, np.float32)
     grad = np.empty(z.shape, np.float32)
-    tiles = [(a, c) for a in range(0, h, STRIP_ROWS) for c in range(0, w, TILE_COLS)]
+    # the cells within r of the grid's sides in tiles of their own, so that every other tile
+    # can have full windows (the fused route)
+    tiles = [(a, b, c, d) for a, b in _cuts(h, r, STRIP_ROWS) for c, d in _cuts(w, r, TILE_COLS)]
     following = itertools.count()  # next() is atomic: each tile is taken once
     size = 14 * min(h, STRIP_ROWS + 2 * r) * min(w, TILE_COLS + 2 * r)
 
     def smooth_tiles(_k0: int, _k1: int) -> None:
         work = np.empty(size, np.float64)
         while (k := next(following)) < len(tiles):
-            a, c = tiles[k]
-            b, d = min(a + STRIP_ROWS, h), min(c + TILE_COLS, w)
+            a, b, c, d = tiles[k]
             lo, hi = max(0, a - r), min(h, b + r)
             cl, ch = max(0, c - r), min(w, d + r)
             inner = (a - lo, b - lo, c - cl, d - cl)
@@ -175,6 +176,15 @@ def smooth_field(
     # one band per core, each taking the next tile (the kernels release the GIL)
     run_bands(smooth_tiles, threads(), min_items=1)
     return out, grad
+
+
+def _cuts(n: int, r: int, step: int) -> list[tuple[int, int]]:
+    """``[lo, hi)`` pieces of ``range(n)``: the first and last ``r`` on their own, the rest
+    in pieces of at most ``step`` (a grid too short for that: pieces of ``step``)."""
+    if n <= 2 * r + 1:
+        return [(a, min(a + step, n)) for a in range(0, n, step)]
+    inner = [(a, min(a + step, n - r)) for a in range(r, n - r, step)]
+    return [(0, r), *inner, (n - r, n)]
 
 
 def smooth_strip(
@@ -426,7 +436,8 @@ def ring_opening(ink: np.ndarray, cut: np.ndarray, min_ring: float, min_stub: fl
     _k.ring_opening(ink, node, order, np.ascontiguousarray(cut), np.float32(min_ring),
                     np.float32(min_stub), np.empty(m, np.int32), np.empty(m, np.int32),
                     np.empty(m, np.float32), np.empty(m, np.float32), np.empty((4, m), np.int32),
-                    np.empty(m, np.bool_), np.empty(m, np.float32), out)  # fmt: skip
+                    np.empty(m, np.bool_), np.empty(m, np.float32), out, np.empty(m, np.int32),
+                    np.empty(m, np.int32))  # fmt: skip
     return out
 
 

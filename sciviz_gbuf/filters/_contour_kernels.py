@@ -291,9 +291,9 @@ def cut_rows(i0, i1, valid, cut):
                         & c[j] & c[j + 1])  # fmt: skip
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
 def ring_opening(ink, node, order, cut, min_ring, min_stub, par, up, at, big, box, touch, level,
-                 out):  # fmt: skip
+                 out, sid, size):  # fmt: skip
     """The attribute opening of ``ink`` by the size of its 8-connected components: each pixel
     keeps ``min(ink, T)`` for the highest ``T`` at which its component of ``ink >= T`` is
     large, 0 if none is (Vincent 1993's area opening, with the attribute of
@@ -304,12 +304,16 @@ def ring_opening(ink, node, order, cut, min_ring, min_stub, par, up, at, big, bo
     flat indices of the inked pixels, by decreasing ink). Components grow as ``T`` falls
     (union-find, pixels added in that order); ``up`` keeps each merge's tree, so a pixel's
     level is that of the first set on its way up that was large, each merge bounded by the
-    level it happened at."""
+    level it happened at. A set is named by the last pixel added to it (``sid`` of its
+    union-find root), which the merge tree and the boxes use; the union-find itself links
+    the smaller tree under the larger (``size``), so its paths stay short along long lines
+    (the names, and so the opening, are those of linking under the newest pixel)."""
     h, w = ink.shape
     m = order.shape[0]
     # working arrays of the m inked pixels (numba's reference counting is off: the caller's):
-    # par, up (the root a set merged into, -1: still a root), at (the level of that merge),
-    # big (level where the set became large, -1), box (4, m) int32, touch, level; out (H, W)
+    # par, up (the set a set merged into, -1: not merged), at (the level of that merge),
+    # big (level where the set became large, -1), box (4, m) int32, touch, level, sid (a
+    # root's set), size (a root's pixels); out (H, W)
     r0, r1, c0, c1 = box[0], box[1], box[2], box[3]
     for k in range(m):
         par[k] = k
@@ -317,21 +321,25 @@ def ring_opening(ink, node, order, cut, min_ring, min_stub, par, up, at, big, bo
         at[k] = np.float32(0.0)
         big[k] = np.float32(-1.0)
         touch[k] = False
+        sid[k] = k
+        size[k] = 1
     for k in range(m):
         p = order[k]
-        pr, pc = p // w, p % w
+        pr = p // w
+        pc = p - pr * w
         v = ink[pr, pc]
         r0[k], r1[k], c0[k], c1[k] = pr, pr, pc, pc
         touch[k] = cut[pr, pc]
+        rk = k  # the union-find root of k's set
         for rr in range(max(pr - 1, 0), min(pr + 2, h)):
             for cc in range(max(pc - 1, 0), min(pc + 2, w)):
                 q = node[rr, cc]
                 if q < 0 or q >= k:  # not inked, or not yet added (k itself included)
                     continue
-                a = _root(par, q)
-                if a == k:
+                ra = _root(par, q)
+                if ra == rk:
                     continue
-                par[a] = k  # k stays the root of its set while it is added
+                a = sid[ra]  # the set met, named by its last pixel
                 up[a] = k
                 at[a] = v
                 r0[k] = min(r0[k], r0[a])
@@ -339,6 +347,11 @@ def ring_opening(ink, node, order, cut, min_ring, min_stub, par, up, at, big, bo
                 c0[k] = min(c0[k], c0[a])
                 c1[k] = max(c1[k], c1[a])
                 touch[k] = touch[k] or touch[a]
+                if size[ra] > size[rk]:
+                    ra, rk = rk, ra
+                par[ra] = rk
+                size[rk] += size[ra]
+                sid[rk] = k
         ext = max(r1[k] - r0[k] + 1, c1[k] - c0[k] + 1)
         if ext > min_ring or (touch[k] and ext > min_stub):
             big[k] = v
@@ -355,8 +368,8 @@ def ring_opening(ink, node, order, cut, min_ring, min_stub, par, up, at, big, bo
             lv = min(at[k], level[up[k]])
         level[k] = lv
         p = order[k]
-        pr, pc = p // w, p % w
-        out[pr, pc] = min(lv, ink[pr, pc])
+        pr = p // w
+        out[pr, p - pr * w] = min(lv, ink[pr, p - pr * w])
 
 
 # ------------------------------------------------------------ band islands (band_heights)

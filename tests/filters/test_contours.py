@@ -681,7 +681,7 @@ def test_smooth_field_by_tiles_equals_one_piece(monkeypatch):
 
 
 @pytest.mark.parametrize("interval", [0.05, 3.0, 12.0, 400.0])
-def test_fused_route_equals_the_separate_kernels(interval):
+def test_fused_route_equals_the_separate_kernels(interval, monkeypatch):
     """A tile whose windows are all full goes through ``fused_rows`` (the fits of widths 1,
     2, 4 and the blend in one pass of rows, the wider fits only on rows that ask for them):
     the same float32 bits as the separate kernels, over steep and flat rows in one tile,
@@ -703,6 +703,12 @@ def test_fused_route_equals_the_separate_kernels(interval):
     reference = G.smooth_strip_reference(z, valid, interval)
     for a, b in zip(fused, reference, strict=True):
         np.testing.assert_array_equal(a, b[r : h - r, r : w - r])
+    # the whole field by tiles (the sides' cells in tiles of their own, the others fused):
+    # the same bits as one piece by the separate kernels
+    monkeypatch.setattr(G, "STRIP_ROWS", 32)
+    monkeypatch.setattr(G, "TILE_COLS", 100)
+    for a, b in zip(G.smooth_field(z, valid, interval), reference, strict=True):
+        np.testing.assert_array_equal(a, b)
     # one nodata cell in a window, or a window over the edge: the separate kernels
     valid[5, 40] = False
     assert not G._fused_ok(valid, inner)
