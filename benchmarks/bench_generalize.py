@@ -11,7 +11,9 @@ On synthetic fractal terrain (float32, 0-2000 m, 20 m minor interval, a nodata l
 * the height-aware smoothing of one strip of ``STRIP_ROWS`` rows plus its halo
   (``smooth_strip``: the fits, then the blend, the tolerance band and the flat test in one
   pass) against ``smooth_strip_reference`` (the same fits, then numpy's expressions);
-* the whole field (``smooth_field``: strip after strip in one working memory);
+* the whole field (``smooth_field``: tiles on every core; the tiles of full windows by the
+  fused route, ``fused_rows``) against the same tiles all by the separate kernels (the route
+  before it: the same bits);
 * the band heights (``band_heights``: run-length labelling of the band islands and a ring
   search for the nearest cell, strips on every core) against ``band_heights_reference`` (a
   ``scipy.ndimage.label`` of the whole grid per band and a Euclidean distance transform);
@@ -88,7 +90,14 @@ def main() -> None:
         print(f"{n:>6} {name:<52} {t_ref:8.3f} {strip_mpix / t_ref:8.1f} {t_ref / t_fast:8.1f}")
         mpix = z.size / 1e6
         t = best(lambda z=z, valid=valid: G.smooth_field(z, valid, interval), args.repeats)
-        print(f"{n:>6} {'smooth_field (whole grid)':<52} {t:8.3f} {mpix / t:8.1f}")
+        print(f"{n:>6} {'smooth_field (whole grid)':<52} {t:8.3f} {mpix / t:8.1f} {1.0:8.1f}")
+        G.FUSED_ROUTE = False  # every tile by the separate kernels: the same bits, slower
+        try:
+            t_sep = best(lambda z=z, valid=valid: G.smooth_field(z, valid, interval), args.repeats)
+        finally:
+            G.FUSED_ROUTE = True
+        name = "smooth_field, separate kernels (no fused route)"
+        print(f"{n:>6} {name:<52} {t_sep:8.3f} {mpix / t_sep:8.1f} {t_sep / t:8.1f}")
         fast = G.band_heights(z, valid, ring, step=100.0)
         t_fast = best(
             lambda z=z, valid=valid, ring=ring: G.band_heights(z, valid, ring, step=100.0), 1

@@ -5,11 +5,13 @@ holds the labels as text over one raster image."""
 
 from __future__ import annotations
 
-import itertools
 import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra import numpy as hnp
 from PIL import Image
 from scipy.spatial import cKDTree
 
@@ -35,11 +37,35 @@ def grid(dem):
 
 
 def _densified(points: np.ndarray, step: float = 0.1) -> np.ndarray:
-    out = [points[:1]]
-    for a, b in itertools.pairwise(points):
-        n = max(1, math.ceil(np.hypot(*(b - a)) / step))
-        out.append(a + (b - a) * (np.arange(1, n + 1) / n)[:, None])
-    return np.concatenate(out)
+    """Points along the polyline every ``step`` of its arc length (and its vertices)."""
+    arc = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(points, axis=0).T))])
+    s = np.union1d(np.arange(0.0, arc[-1], step), arc)
+    return np.column_stack([np.interp(s, arc, points[:, k]) for k in (0, 1)])
+
+
+@settings(max_examples=80, deadline=None)
+@given(
+    hnp.arrays(
+        np.float64, st.tuples(st.integers(2, 40), st.just(2)), elements=st.floats(-100, 100)
+    ),
+    st.floats(0.05, 20.0),
+)
+def test_densify_keeps_the_vertices_and_the_step(points, step):
+    """The page's resampling of a line: its vertices in order, no gap over ``step``, every
+    new point on its segment."""
+    from sciviz_gbuf.recipes.layout import _densify
+
+    out = _densify(points, step)
+    seg = np.hypot(*np.diff(points, axis=0).T)
+    n = np.maximum(np.ceil(seg / step).astype(int), 1)
+    at = np.concatenate([[0], np.cumsum(n)])  # where each vertex lands
+    np.testing.assert_allclose(out[at], points, rtol=0, atol=1e-9)
+    gaps = np.hypot(*np.diff(out, axis=0).T)
+    assert np.all(gaps <= step * (1 + 1e-9) + 1e-9)
+    for k in range(len(seg)):  # between its two vertices, on the straight segment
+        a, b, part = points[k], points[k + 1], out[at[k] : at[k + 1] + 1]
+        cross = (b - a)[0] * (part - a)[:, 1] - (b - a)[1] * (part - a)[:, 0]
+        assert np.all(np.abs(cross) <= 1e-6 * (1 + seg[k]) * (1 + np.abs(part - a).max()))
 
 
 def test_vector_lines_follow_the_exact_contours(grid):
