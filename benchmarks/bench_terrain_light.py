@@ -15,6 +15,11 @@ What is measured, on synthetic fractal terrain (spectral synthesis, power ~ 1/f^
   ``sky_view`` and ``openness`` with 16 directions and the default radius (50 cells, 1500 m);
   up to 2048^2 also the per-cell ray march ``sky_view`` ran before its row march (the same
   samples, kept as the reference the tests hold the row march to).
+* The fused row march (four steps a pass, what ``sky_view`` and ``openness`` run) against
+  the one-step row march it replaced (``K.sky_view_march_kernel``, the same values bit for
+  bit), interleaved in this process: ``--rounds`` rounds of new, old, each the whole kernel
+  on the same rays; the median and range of each one's MPix/s and of the per-round ratio
+  (sizes in ``--compare-sizes``, default the largest of ``--sizes``).
 * Peer, same grid, same run: ``hillshade`` (a 3x3 stencil: the floor of any per-cell terrain
   shading). The ``x hillshade`` column is the time relative to it.
 * Numpy references on the smallest size: shadows for a west sun (azimuth 270) as the row-wise
@@ -126,7 +131,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--sizes", type=int, nargs="+", default=[1024, 2048, 4096])
     parser.add_argument("--min-repeats", type=int, default=1)
     parser.add_argument("--target", type=float, default=1.5, help="seconds per cell at least")
+    parser.add_argument("--compare-sizes", type=int, nargs="*", default=None)
+    parser.add_argument("--rounds", type=int, default=3, help="rounds of the interleaved runs")
+    parser.add_argument("--only-compare", action="store_true", help="skip the main table")
     args = parser.parse_args(argv)
+    if args.compare_sizes is None:
+        args.compare_sizes = [max(args.sizes)]
 
     print(f"numba {numba.__version__}, {numba.get_num_threads()} threads, numpy {np.__version__}")
     print(f"terrain: fractal, {CELL:g} m cells; sun azimuth {AZIMUTH:g}, altitude {ALTITUDE:g}")
@@ -136,6 +146,9 @@ def main(argv: list[str] | None = None) -> int:
     cast_shadows(warm, dx=CELL, dy=CELL, sun_radius=0.5)
     sky_view(warm, dx=CELL, dy=CELL)
 
+    if args.only_compare:
+        fused_vs_march(args.compare_sizes, args.rounds)
+        return 0
     header = (
         f"{'function':<34} {'size':>6} {'best s':>8} {'MPix/s':>8} {'x hillshade':>12} {'cores':>6}"
     )
@@ -159,6 +172,12 @@ def main(argv: list[str] | None = None) -> int:
             ("sky_view 16 dirs r=10 px (RVT's)", partial(sky_view, z, radius=10 * CELL, **kw)),
             ("openness 16 dirs r=50 px", partial(openness, z, dx=CELL, dy=CELL)),
         ]
+        zz = T._prepare(z, CELL, CELL, 1.0, None)
+        march_rays = T._sky_rays(zz, CELL, CELL, 16, T.default_sky_radius(CELL, CELL), local=False)
+        cells.append(("sky_view one-step march (before)",
+                      partial(K.sky_view_march_kernel, zz, *march_rays)))  # fmt: skip
+        cells.append(("openness one-step march (before)",
+                      partial(K.openness_march_kernel, zz, *march_rays)))  # fmt: skip
         if n <= 2048:  # the per-cell march sky_view ran before the row march: slow
             zz = T._prepare(z, CELL, CELL, 1.0, None)
             rays = T._sky_rays(zz, CELL, CELL, 16, T.default_sky_radius(CELL, CELL))
@@ -198,7 +217,52 @@ def main(argv: list[str] | None = None) -> int:
         f"speed-up {t_np / t_nb:.1f}x, max |diff| {diff:.1e}"
     )
     rvt_peer(z)
+    if args.compare_sizes:
+        print()
+        fused_vs_march(args.compare_sizes, args.rounds)
     return 0
+
+
+def fused_vs_march(sizes: list[int], rounds: int) -> None:
+    """The fused row march (``sky_view_kernel``, ``openness_kernel``: what the public
+    functions run) against the one-step march (``*_march_kernel``), interleaved: each round
+    times new then old on the same rays; median [range] of MPix/s and of new/old per round;
+    ``cores`` the least CPU time over wall time of the calls (about 2 on two idle cores)."""
+    print(f"fused row march vs one-step march, 16 dirs, r=50 px, {rounds} interleaved rounds:")
+    head = (
+        f"{'kernel':<12} {'size':>6} {'new MPix/s':>22} {'old MPix/s':>22} {'new/old':>20} "
+        f"{'cores':>6}"
+    )
+    print(head)
+    print("-" * len(head))
+    for n in sizes:
+        z = T._prepare(fractal_terrain(n), CELL, CELL, 1.0, None)
+        rays = T._sky_rays(z, CELL, CELL, 16, T.default_sky_radius(CELL, CELL), local=False)
+        for name, new, old in (
+            ("sky_view", K.sky_view_kernel, K.sky_view_march_kernel),
+            ("openness", K.openness_kernel, K.openness_march_kernel),
+        ):
+            rates: list[tuple[float, float]] = []
+            cores: list[float] = []
+            for _ in range(rounds):
+                pair = []
+                for fn in (new, old):
+                    c0, t0 = time.process_time(), time.perf_counter()
+                    fn(z, *rays)
+                    wall = time.perf_counter() - t0
+                    pair.append(n * n / wall / 1e6)
+                    cores.append((time.process_time() - c0) / wall)
+                rates.append((pair[0], pair[1]))
+            a = np.array(rates)
+            ratio = a[:, 0] / a[:, 1]
+
+            def fmt(v: np.ndarray) -> str:
+                return f"{np.median(v):.1f} [{v.min():.1f}-{v.max():.1f}]"
+
+            print(
+                f"{name:<12} {n:>6} {fmt(a[:, 0]):>22} {fmt(a[:, 1]):>22} {fmt(ratio):>20} "
+                f"{min(cores):>6.2f}"
+            )
 
 
 def rvt_peer(z: np.ndarray) -> None:

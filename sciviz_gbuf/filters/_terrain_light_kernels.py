@@ -5,14 +5,22 @@ Two statements of the sky rays (sky view, openness):
 - :func:`_horizon_tan` marches one cell's ray (per-cell, float64, with bounds that end the
   march early): :func:`sky_view_reference_kernel`, :func:`openness_reference_kernel`, and
   the cast shadows.
-- :func:`_horizon_row` marches the rays of a whole row of cells at once, one step at a time
-  (in blocks of ``MARCH_BLOCK`` cells that stay in cache, each through all its steps).
-  A step ``k`` of direction ``d`` puts every cell's sample at the same offset from it, with
-  the same interpolation weight (the weight comes from the offset alone, :func:`_sample`),
-  so the step is one loop over the block reading one or two shifted rows of the grid: a
-  float32 loop LLVM vectorises. Same samples, same bounds; float32 instead of float64, so the
-  sky-view factor agrees with the per-cell march within 1e-6 and openness within 1e-4
-  degrees (tested). About 200 x the per-cell march.
+- :func:`_horizon_row` marches the rays of a whole row of cells at once (in blocks of
+  ``MARCH_BLOCK`` cells that stay in cache, each through all its steps). A step ``k`` of
+  direction ``d`` puts every cell's sample at the same offset from it, with the same
+  interpolation weight (the weight comes from the offset alone, :func:`_sample`), so the step
+  is one loop over the block reading one or two shifted rows of the grid: a float32 loop LLVM
+  vectorises. Same samples, same bounds; float32 instead of float64, so the sky-view factor
+  agrees with the per-cell march within 1e-6 and openness within 1e-4 degrees (tested).
+  :func:`sky_view_kernel` and :func:`openness_kernel` take four steps in one loop
+  (:func:`_fused4`), the same samples and float32 expressions, so the same values bit for bit
+  as the one-step march (:func:`sky_view_march_kernel`, :func:`openness_march_kernel`, kept
+  as the reference; tested). The one-step loop's ``best[j] = t if t > best[j] else best[j]``
+  stores only where a sample raises the maximum, and the LLVM of llvmlite 0.50 (numba
+  0.68) vectorises it with masked stores (``vmaskmovps``), microcoded on AMD Zen: ~1.7 cycles a
+  sample in a loop over L1-resident rows, against ~0.3 for the fused loop, which keeps the
+  maximum in a register over its four samples and stores it unconditionally. About 3 x the
+  one-step march (docs/performance.md).
 """
 
 from __future__ import annotations
@@ -573,6 +581,137 @@ def _steps_in(h: int, w: int, d_row: float, d_col: float, n_in: np.ndarray) -> N
 
 
 @njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _step4_max(
+    a0: np.ndarray, a1: np.ndarray, a2: np.ndarray, a3: np.ndarray, z0: np.ndarray,
+    best: np.ndarray, i0: np.float32, i1: np.float32, i2: np.float32, i3: np.float32,
+) -> None:  # fmt: skip
+    """Four steps of samples on cell centres at once (:func:`_step_max` four times): the
+    running maximum stays in a register and is stored once, unconditionally. A loop that
+    stores ``best[j]`` only where a sample raises it is compiled (llvmlite 0.50) to masked stores
+    (``vmaskmovps``), microcoded on AMD Zen: the one-step loop ran at ~1.7 cycles a sample."""
+    for j in range(best.shape[0]):
+        u = z0[j]
+        m = best[j]
+        t = (a0[j] - u) * i0
+        m = t if t > m else m  # NaN (nodata) never raises it
+        t = (a1[j] - u) * i1
+        m = t if t > m else m
+        t = (a2[j] - u) * i2
+        m = t if t > m else m
+        t = (a3[j] - u) * i3
+        m = t if t > m else m
+        best[j] = m
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _step4_lerp_max(
+    a0: np.ndarray, b0: np.ndarray, a1: np.ndarray, b1: np.ndarray, a2: np.ndarray,
+    b2: np.ndarray, a3: np.ndarray, b3: np.ndarray, z0: np.ndarray, best: np.ndarray,
+    f0: np.float32, f1: np.float32, f2: np.float32, f3: np.float32,
+    i0: np.float32, i1: np.float32, i2: np.float32, i3: np.float32,
+) -> None:  # fmt: skip
+    """Four interpolated steps at once (:func:`_step_lerp_max` four times, the same float32
+    expression per sample, so the same maxima bit for bit). A step on a cell centre comes
+    with ``b = a`` and ``f = 0``: ``a + 0 (a - a)`` is ``a``, and a nodata neighbour it must
+    not read is not read. More than four steps at once was slower (16 streams of rows)."""
+    for j in range(best.shape[0]):
+        u = z0[j]
+        m = best[j]
+        t = (a0[j] + f0 * (b0[j] - a0[j]) - u) * i0
+        m = t if t > m else m
+        t = (a1[j] + f1 * (b1[j] - a1[j]) - u) * i1
+        m = t if t > m else m
+        t = (a2[j] + f2 * (b2[j] - a2[j]) - u) * i2
+        m = t if t > m else m
+        t = (a3[j] + f3 * (b3[j] - a3[j]) - u) * i3
+        m = t if t > m else m
+        best[j] = m
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _one_step(
+    z: np.ndarray, i: int, k: int, rows_major: bool, d_row: float, d_col: float, inv: np.float32,
+    best: np.ndarray, lo: int, hi: int,
+) -> None:  # fmt: skip
+    """Step ``k`` of the rays of cells ``lo .. hi`` of row ``i`` (all inside the grid at that
+    step), as :func:`_horizon_row` takes it: the cells whose sample and its neighbour lie
+    inside the row in one loop, the (at most two) others by :func:`_sample`'s clamps."""
+    if lo >= hi:
+        return
+    h, w = z.shape
+    zi = z[i]
+    if rows_major:
+        r = i + k * int(d_row)
+        o = k * d_col
+        b = math.floor(o)
+        f = np.float32(o - b)
+        zr = z[r]
+        va = max(lo, -b)
+        vb = min(hi, w - 1 - b)
+        if f == np.float32(0.0):
+            vb = min(hi, w - b)
+            if va < vb:
+                _step_max(zr[va + b : vb + b], zi[va:vb], best[va:vb], inv)
+        elif va < vb:
+            _step_lerp_max(zr[va + b : vb + b], zr[va + b + 1 : vb + b + 1], zi[va:vb],
+                           best[va:vb], f, inv)  # fmt: skip
+        if va >= vb:
+            va = vb = hi
+        for part in range(2):
+            p0 = lo if part == 0 else max(vb, lo)
+            p1 = min(va, hi) if part == 0 else hi
+            for j in range(p0, p1):
+                cs, ff = _sample(j, o, w)
+                a = zr[cs]
+                v = a + np.float32(ff) * (zr[cs + 1] - a) if ff > 0.0 else a
+                t = (v - zi[j]) * inv
+                best[j] = t if t > best[j] else best[j]
+    else:
+        r0, ff = _sample(i, k * d_row, h)
+        f = np.float32(ff)
+        za = z[r0]
+        shift = k * int(d_col)
+        if f == np.float32(0.0):
+            _step_max(za[lo + shift : hi + shift], zi[lo:hi], best[lo:hi], inv)
+        else:
+            zb = z[r0 + 1]
+            _step_lerp_max(za[lo + shift : hi + shift], zb[lo + shift : hi + shift],
+                           zi[lo:hi], best[lo:hi], f, inv)  # fmt: skip
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
+def _fused4(
+    z: np.ndarray, rows_major: bool, gi: np.ndarray, ff: np.ndarray, iv: np.ndarray,
+    best: np.ndarray, fa: int, fb: int,
+) -> None:  # fmt: skip
+    """Four steps of the cells ``fa .. fb`` of row ``gi[4, 0]``, every sample and its
+    neighbour inside the grid: step ``s`` reads row ``gi[0, s]`` shifted by ``gi[1, s]``
+    columns (and the next column, rows-major, or the next row, columns-major), weight
+    ``ff[s]``, inverse distance ``iv[s]``."""
+    zi = z[gi[4, 0]]
+    z0 = zi[fa:fb]
+    bt = best[fa:fb]
+    r0, r1, r2, r3 = gi[0, 0], gi[0, 1], gi[0, 2], gi[0, 3]
+    s0, s1, s2, s3 = fa + gi[1, 0], fa + gi[1, 1], fa + gi[1, 2], fa + gi[1, 3]
+    n = fb - fa
+    a0, a1, a2, a3 = z[r0][s0 : s0 + n], z[r1][s1 : s1 + n], z[r2][s2 : s2 + n], z[r3][s3 : s3 + n]
+    z32 = np.float32(0.0)
+    if ff[0] == z32 and ff[1] == z32 and ff[2] == z32 and ff[3] == z32:
+        _step4_max(a0, a1, a2, a3, z0, bt, iv[0], iv[1], iv[2], iv[3])
+        return
+    # the interpolation neighbour: the next column (rows-major) or row; a step on a cell
+    # centre reads its cell twice
+    dr = 0 if rows_major else 1
+    dc = 1 if rows_major else 0
+    b0 = z[r0 + dr][s0 + dc : s0 + dc + n] if ff[0] != z32 else a0
+    b1 = z[r1 + dr][s1 + dc : s1 + dc + n] if ff[1] != z32 else a1
+    b2 = z[r2 + dr][s2 + dc : s2 + dc + n] if ff[2] != z32 else a2
+    b3 = z[r3 + dr][s3 + dc : s3 + dc + n] if ff[3] != z32 else a3
+    _step4_lerp_max(a0, b0, a1, b1, a2, b2, a3, b3, z0, bt, ff[0], ff[1], ff[2], ff[3],
+                    iv[0], iv[1], iv[2], iv[3])  # fmt: skip
+
+
+@njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
 def _horizon_row(
     z: np.ndarray,
     i: int,
@@ -587,114 +726,121 @@ def _horizon_row(
     floor_tan: float,
     best: np.ndarray,
     n_in: np.ndarray,
+    gi: np.ndarray,
+    ff: np.ndarray,
+    iv: np.ndarray,
+    fused: int,
 ) -> None:
     """``best[j]``: the largest ``(sample - z[i, j]) / distance`` along the ray of every cell
     of row ``i`` in one direction (at least ``floor_tan``), as :func:`_horizon_tan` marches it:
     the same samples, steps and grid-edge rule; nodata samples never raise it. ``n_in``: the
-    direction's :func:`_steps_in`."""
+    direction's :func:`_steps_in`.
+
+    The row is marched in blocks of ``MARCH_BLOCK`` cells, each through all its steps (its
+    bests, heights and samples stay in the first-level cache), in groups of four steps. With
+    ``fused`` (what :func:`sky_view_kernel` runs), the cells all four of whose samples (and
+    their interpolation neighbours) lie inside the grid take one loop over the four steps
+    (:func:`_fused4`), which loads and stores their running maxima once; the few others, near
+    the grid's edges, and every cell without ``fused`` (the one-step march,
+    :func:`sky_view_march_kernel`), step by step (:func:`_one_step`). The same float32
+    expression per sample either way, and a maximum does not depend on the order it is taken
+    in: the same ``best`` bit for bit. ``gi`` (5, 4) int64, ``ff``, ``iv`` (4,) float32:
+    scratch for a group's rows, column shifts, spans, weights and inverse distances."""
     h, w = z.shape
     zi = z[i]
     f0 = np.float32(floor_tan)
     for j in range(w):
         best[j] = f0
     rows_major = abs(d_row) == 1.0
-    # steps each cell's ray takes inside the grid: along the major axis one bound for the
-    # row, along the minor axis one per cell (n_in, :func:`_steps_in`)
+    di = int(d_row)
+    dj = int(d_col)
     if rows_major:
-        di = int(d_row)
         n_row = h - 1 - i if di > 0 else i
+    elif d_row > 0.0:
+        n_row = int((h - 1 - i) / d_row + 1e-9)
+    elif d_row < 0.0:
+        n_row = int(i / -d_row + 1e-9)
     else:
-        dj = int(d_col)
-        if d_row > 0.0:
-            n_row = int((h - 1 - i) / d_row + 1e-9)
-        elif d_row < 0.0:
-            n_row = int(i / -d_row + 1e-9)
-        else:
-            n_row = h + w
+        n_row = h + w
     n_k = min(n_row, max_steps)
     far = n_k * step_len
-    # the row in blocks of MARCH_BLOCK cells, each marched through every step: the block's
-    # bests, heights and samples stay in the first-level cache (the samples are the same,
-    # and a maximum does not depend on the order it is taken in)
+    gi[4, 0] = i
     for c0 in range(0, w, MARCH_BLOCK):
         c1 = min(c0 + MARCH_BLOCK, w)
-        for k in range(1, n_k + 1):
-            dist = k * step_len
-            inv = np.float32(1.0 / dist)
-            # the cells whose ray is still inside the grid at step k: n_in is monotone in j
-            ja = c0
-            jb = c1
-            if rows_major:
-                if d_col > 0.0:
-                    while jb > ja and n_in[jb - 1] < k:
-                        jb -= 1
-                elif d_col < 0.0:
-                    while ja < jb and n_in[ja] < k:
-                        ja += 1
-            elif dj > 0:
-                jb = min(c1, max(w - k, 0))
-            else:
-                ja = max(c0, min(k, w))
+        # the cells whose ray is still inside the grid at step k: n_in is monotone in j, so
+        # the span only shrinks as k grows
+        ja = c0
+        jb = c1
+        k = 1
+        while k <= n_k:
+            g = min(4, n_k - k + 1)
+            fa = c0  # the cells inside, with their neighbours, at all g steps
+            fb = c1
+            for s in range(g):
+                ks = k + s
+                if rows_major:
+                    if d_col > 0.0:
+                        while jb > ja and n_in[jb - 1] < ks:
+                            jb -= 1
+                    elif d_col < 0.0:
+                        while ja < jb and n_in[ja] < ks:
+                            ja += 1
+                    o = ks * d_col
+                    b = math.floor(o)
+                    f = np.float32(o - b)
+                    gi[0, s] = i + ks * di
+                    gi[1, s] = b
+                    ff[s] = f
+                    fa = max(fa, ja, -b)
+                    fb = min(fb, jb, w - b if f == np.float32(0.0) else w - 1 - b)
+                else:
+                    if dj > 0:
+                        jb = min(c1, max(w - ks, 0))
+                    else:
+                        ja = max(c0, min(ks, w))
+                    r0, fr = _sample(i, ks * d_row, h)
+                    gi[0, s] = r0
+                    gi[1, s] = ks * dj
+                    ff[s] = np.float32(fr)
+                    fa = max(fa, ja)
+                    fb = min(fb, jb)
+                gi[2, s] = ja
+                gi[3, s] = jb
+                iv[s] = np.float32(1.0 / (ks * step_len))
+            if gi[2, 0] >= gi[3, 0]:
+                break  # no ray inside at step k, nor later
+            together = fused and g == 4 and fa < fb
+            if together:
+                _fused4(z, rows_major, gi, ff, iv, best, fa, fb)
+            # the cells outside the fused span (all of them after a short group, the last
+            # one, or a span too narrow): step by step; one call site, as each is compiled
+            for q in range(2 * g):
+                s = q >> 1
+                lo = gi[2, s] if q & 1 == 0 or not together else fb
+                hi = (fa if together else gi[3, s]) if q & 1 == 0 else (gi[3, s] if together else 0)
+                _one_step(z, i, k + s, rows_major, d_row, d_col, iv[s], best, lo, hi)
+            k += g
             if ja >= jb:
                 break
-            if rows_major:
-                r = i + k * di
-                o = k * d_col
-                b = math.floor(o)
-                f = np.float32(o - b)
-                zr = z[r]
-                # cells whose sample and its neighbour lie inside the row: the vector loop;
-                # the (at most two) others by _sample's clamps
-                va = max(ja, -b)
-                vb = min(jb, w - 1 - b)
-                if f == np.float32(0.0):
-                    vb = min(jb, w - b)
-                    if va < vb:
-                        _step_max(zr[va + b : vb + b], zi[va:vb], best[va:vb], inv)
-                elif va < vb:
-                    _step_lerp_max(zr[va + b : vb + b], zr[va + b + 1 : vb + b + 1], zi[va:vb],
-                                   best[va:vb], f, inv)  # fmt: skip
-                if va >= vb:
-                    va = vb = jb
-                for part in range(2):
-                    lo = ja if part == 0 else max(vb, ja)
-                    hi = min(va, jb) if part == 0 else jb
-                    for j in range(lo, hi):
-                        cs, ff = _sample(j, o, w)
-                        a = zr[cs]
-                        v = a + np.float32(ff) * (zr[cs + 1] - a) if ff > 0.0 else a
-                        t = (v - zi[j]) * inv
-                        best[j] = t if t > best[j] else best[j]
-            else:
-                r0, ff = _sample(i, k * d_row, h)
-                f = np.float32(ff)
-                za = z[r0]
-                shift = k * dj
-                if f == np.float32(0.0):
-                    _step_max(za[ja + shift : jb + shift], zi[ja:jb], best[ja:jb], inv)
-                else:
-                    zb = z[r0 + 1]
-                    _step_lerp_max(za[ja + shift : jb + shift], zb[ja + shift : jb + shift],
-                                   zi[ja:jb], best[ja:jb], f, inv)  # fmt: skip
-            # every few steps: stop once no cell's ray can rise further (the march's bounds of the
-            # rows / columns ahead; the per-cell march's local maximum, a box filter as wide as the
-            # rays, would cost as much as the march and rarely ends a whole row early)
-            if k % 4 == 0 and k < n_k:
-                nxt = (k + 1) * step_len
+            # every four steps: stop once no cell's ray can rise further (the test of
+            # :func:`_horizon_row`, at the same steps)
+            last = k - 1
+            if last % 4 == 0 and last < n_k:
+                nxt = (last + 1) * step_len
                 done = True
                 if rows_major:
-                    rub = row_ub[rw, min(max(i + (k + 1) * di, 0), h - 1)]
+                    rub = row_ub[rw, min(max(i + (last + 1) * di, 0), h - 1)]
                     for j in range(ja, jb):
                         reach = far if best[j] < 0 else nxt
                         if rub - zi[j] > best[j] * reach:
                             done = False
                             break
                 else:
-                    r1, _ = _sample(i, (k + 1) * d_row, h)
+                    r1, _ = _sample(i, (last + 1) * d_row, h)
                     rub = row_ub[rw, r1]
                     for j in range(ja, jb):
                         reach = far if best[j] < 0 else nxt
-                        cub = col_ub[cw, min(max(j + (k + 1) * dj, 0), w - 1)]
+                        cub = col_ub[cw, min(max(j + (last + 1) * dj, 0), w - 1)]
                         if min(rub, cub) - zi[j] > best[j] * reach:
                             done = False
                             break
@@ -702,33 +848,47 @@ def _horizon_row(
                     break
 
 
-def _row_march(z: np.ndarray, rays: tuple, mode: int) -> np.ndarray:
+def _row_march(z: np.ndarray, rays: tuple, mode: int, fused: int = 1) -> np.ndarray:
     """``mode`` 0 (sky-view factor) or 1 (positive openness) of every cell of ``z`` by the row
-    march; ``rays`` the arguments of the reference kernels after ``z`` (its ``local_ub``,
-    the per-cell bound, is not used and may be None)."""
+    march (:func:`_horizon_row`), four steps at a time (``fused`` 1) or one (0); ``rays``
+    the arguments of the reference kernels after ``z`` (its ``local_ub``, the per-cell
+    bound, is not used and may be None)."""
     d_rows, d_cols, step_lens, row_ubs, col_ubs, row_which, col_which, _, radius = rays
     h, w = z.shape
     out = np.empty((h, w), dtype=np.float32)
     max_steps = _march_steps(step_lens, radius, h, w)
     run_bands(
         _sky_rows, h, z, d_rows, d_cols, step_lens, row_ubs, col_ubs, row_which, col_which,
-        max_steps, mode, out,
+        max_steps, mode, fused, out,
         scratch=lambda: (np.empty(w, np.float32), np.empty((len(d_rows), w), np.int64),
-                         np.empty(w)),
+                         np.empty(w), np.empty((5, 4), np.int64), np.empty(4, np.float32),
+                         np.empty(4, np.float32)),
     )  # fmt: skip
     return out
 
 
 def sky_view_kernel(z: np.ndarray, *rays: object) -> np.ndarray:
-    """Sky-view factor of every cell of ``z``, row by row (:func:`_horizon_row`); the
-    arguments of :func:`sky_view_reference_kernel`."""
+    """Sky-view factor of every cell of ``z``, row by row, four steps at a time
+    (:func:`_horizon_row` fused); the arguments of :func:`sky_view_reference_kernel`."""
     return _row_march(z, rays, 0)
 
 
 def openness_kernel(z: np.ndarray, *rays: object) -> np.ndarray:
-    """Positive openness of every cell of ``z``, row by row (:func:`_horizon_row`); the
-    arguments of :func:`openness_reference_kernel`."""
+    """Positive openness of every cell of ``z``, row by row, four steps at a time
+    (:func:`_horizon_row` fused); the arguments of :func:`openness_reference_kernel`."""
     return _row_march(z, rays, 1)
+
+
+def sky_view_march_kernel(z: np.ndarray, *rays: object) -> np.ndarray:
+    """:func:`sky_view_kernel` one step at a time (:func:`_horizon_row` not fused, the row
+    march before the fused steps): the reference the fused route is tested against, bit for
+    bit."""
+    return _row_march(z, rays, 0, 0)
+
+
+def openness_march_kernel(z: np.ndarray, *rays: object) -> np.ndarray:
+    """:func:`openness_kernel` one step at a time (:func:`_horizon_row` not fused)."""
+    return _row_march(z, rays, 1, 0)
 
 
 @njit(cache=True, nogil=True, _nrt=False, error_model="numpy")
@@ -745,10 +905,14 @@ def _sky_rows(
     col_which: np.ndarray,
     max_steps: np.ndarray,
     mode: int,
+    fused: int,
     out: np.ndarray,
     best: np.ndarray,
     n_in: np.ndarray,
     acc: np.ndarray,
+    gi: np.ndarray,
+    ff: np.ndarray,
+    iv: np.ndarray,
 ) -> None:
     """Rows ``i0 .. i1`` of the sky-view factor (``mode`` 0: ``1 - mean sin(max(0, horizon))``)
     or the positive openness (1: ``mean (90 - horizon)`` in degrees, a ray without a sample
@@ -765,8 +929,8 @@ def _sky_rows(
             acc[j] = 0.0
         for d in range(n):
             _horizon_row(z, i, d_rows[d], d_cols[d], step_lens[d], max_steps[d], row_ubs,
-                         row_which[d], col_ubs, col_which[d], floor_tan, best,
-                         n_in[d])  # fmt: skip
+                         row_which[d], col_ubs, col_which[d], floor_tan, best, n_in[d], gi, ff,
+                         iv, fused)  # fmt: skip
             if mode == 0:
                 for j in range(w):
                     t = best[j]

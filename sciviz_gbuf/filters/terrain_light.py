@@ -319,6 +319,19 @@ def sky_view(
         positive; ``directions`` not an integer in [1, 360]; ``radius`` beyond 4096 cells;
         non-finite ``z_factor``.
 
+    Notes
+    -----
+    Every cell's ray takes every step within ``radius`` (``directions * radius / cell``
+    samples a cell), marched for a whole row of cells at once: a step puts every cell's sample
+    at the same offset with the same interpolation weight, so it is one vectorised float32
+    loop over shifted rows of the grid, and four steps share one loop (each cell's running
+    maximum kept in a register). The values are those of the per-cell march of the same
+    samples within float32 rounding (1e-6), and those of the one-step row march bit for bit.
+    The march stops early only where no row or column ahead could raise any cell's horizon.
+    A cell reads the cells within ``radius`` of it along the finer axis (plus an interpolation
+    neighbour across), the halo of the chunked (dask) evaluation
+    (:func:`sky_view_reach`), whose chunks give the whole grid's values.
+
     References
     ----------
     .. [1] Zakšek, K., Oštir, K. & Kokalj, Ž. (2011). Sky-view factor as a relief visualization

@@ -595,7 +595,11 @@ def test_openness_odd_inputs(z, directions, radius):
     assert np.array_equal(np.isnan(got), np.isnan(z))
     ok = ~np.isnan(got)
     assert ((got[ok] >= 0.0) & (got[ok] <= 180.0)).all()
-    np.testing.assert_allclose(got, reference_openness(z, directions, radius, 1.0, 1.0), atol=2e-4)
+    # against the float64 statement on the float32 heights the operator works on: at -310.65
+    # m and -310 m a cell apart the height's own rounding (3e-5 m) is 1e-3 degrees
+    z32 = z.astype(np.float32).astype(np.float64)
+    np.testing.assert_allclose(got, reference_openness(z32, directions, radius, 1.0, 1.0),
+                               atol=2e-4)  # fmt: skip
 
 
 # ---------------------------------------------------------------- row march vs per-cell march
@@ -645,3 +649,102 @@ def test_row_march_on_odd_grids(z, directions, radius):
         a, b = fast(zz, *rays), slow(zz, *rays)
         np.testing.assert_array_equal(np.isnan(a), np.isnan(b))
         np.testing.assert_allclose(a, b, atol=tol, rtol=0)
+
+
+# ------------------------------------------- fused row march (four steps at a time) vs one step
+
+
+def _spectral(h, w, beta, seed, relief=1500.0):
+    """Fractal heights with a 1/f^beta power spectrum (Hurst exponent (beta - 2) / 2)."""
+    rng = np.random.default_rng(seed)
+    f = np.hypot(np.fft.fftfreq(h)[:, None], np.fft.rfftfreq(w)[None, :])
+    f[0, 0] = 1.0
+    amp = f ** (-beta / 2.0)
+    amp[0, 0] = 0.0
+    z = np.fft.irfft2(amp * np.exp(2j * np.pi * rng.random(amp.shape)), s=(h, w))
+    return ((z - z.min()) / (z.max() - z.min()) * relief).astype(np.float32)
+
+
+def _canyons(h, w):
+    """Steep terrain: a deep V canyon, a slot with vertical walls and a cliff step."""
+    y, x = np.mgrid[0:h, 0:w].astype(np.float64)
+    z = 400.0 + 6.0 * np.abs(x - 0.4 * y - w / 3)  # a V canyon, walls ~80 degrees at 1 m
+    z[:, w // 2 : w // 2 + 3] -= 300.0  # a slot 3 cells wide
+    z[h // 2 :, :] += 250.0  # a cliff across the grid
+    return z.astype(np.float32)
+
+
+def _fused_and_march_agree(z, dx, dy, directions, radius):
+    """The fused route (the kernels the public functions call) equals the one-step row
+    march it replaced bit for bit: sky-view factor and openness of the terrain and of the
+    inverted terrain (negative openness), NaN at the same cells."""
+    zz = T._prepare(z, dx, dy, 1.0, None)
+    r = T.default_sky_radius(dx, dy) if radius is None else radius
+    worst = 0.0
+    for grid in (zz, -zz):
+        rays = T._sky_rays(grid, dx, dy, directions, r, local=False)
+        for fast, march in ((K.sky_view_kernel, K.sky_view_march_kernel),
+                            (K.openness_kernel, K.openness_march_kernel)):  # fmt: skip
+            a, b = fast(grid, *rays), march(grid, *rays)
+            np.testing.assert_array_equal(np.isnan(a), np.isnan(b))
+            with np.errstate(invalid="ignore"):
+                worst = max(worst, float(np.nanmax(np.abs(a - b), initial=0.0)))
+            np.testing.assert_array_equal(a, b)
+    return worst
+
+
+@pytest.mark.parametrize("beta", [2.2, 2.8, 3.4])
+@pytest.mark.parametrize(("dx", "dy"), [(30.0, 30.0), (30.0, 18.0), (10.0, 25.0)])
+def test_fused_march_on_fractal_terrain(beta, dx, dy):
+    z = _spectral(150, 233, beta, seed=int(beta * 10))
+    assert _fused_and_march_agree(z, dx, dy, 16, None) == 0.0
+
+
+@pytest.mark.parametrize("case", ["integer", "holes", "canyons"])
+def test_fused_march_on_hard_terrain(case):
+    z = _spectral(140, 210, 2.6, seed=4)
+    if case == "integer":
+        z = np.round(z)  # ties between samples and heights everywhere
+    elif case == "holes":
+        rng = np.random.default_rng(9)
+        z[rng.random(z.shape) < 0.03] = np.nan
+        z[30:60, 80:150] = np.nan
+        z[:, -3:] = np.nan
+    else:
+        z = _canyons(140, 210)
+    for directions, radius, dx, dy in ((16, None, 1.0, 1.0), (7, 40.0, 1.0, 0.6), (32, 25.0, 2, 1)):
+        assert _fused_and_march_agree(z, dx, dy, directions, radius) == 0.0
+
+
+@pytest.mark.parametrize(
+    "name",
+    ["hugo_site.asc", "pre_runout_DEM.asc", "SRTMGL3_40.09_-105.55_40.21_-105.35.asc",
+     "N10W110.hgt"],
+)  # fmt: skip
+def test_fused_march_on_real_dems(name):
+    from tests.helpers.paths import shared_dem
+
+    dem = shared_dem(name)
+    z = np.where(dem.mask, dem.heights, np.nan) if dem.mask is not None else dem.heights
+    z = np.asarray(z, dtype=np.float32)
+    dx, dy = (abs(float(v)) for v in dem.pixel_size)  # metres, geographic grids too
+    if z.shape[0] > 400:  # the 1201^2 SRTM tile: a crop keeps the test short
+        z = z[200:520, 300:700]
+    assert _fused_and_march_agree(z, dx, dy, 16, None) == 0.0
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    arrays(
+        np.float32,
+        st.tuples(st.integers(1, 12), st.integers(1, 12)),
+        elements=st.one_of(st.floats(-50, 50, width=32), st.just(np.nan)),
+    ),
+    st.integers(1, 16),
+    st.floats(0.5, 14.0),
+    st.sampled_from([(1.0, 1.0), (1.0, 1.5), (0.7, 0.3)]),
+)
+@example(np.full((5, 9), np.nan, np.float32), 8, 6.0, (1.0, 1.0))  # all nodata
+@example(np.full((9, 9), 3.0, np.float32), 16, 14.0, (1.0, 1.0))  # constant
+def test_fused_march_on_odd_grids(z, directions, radius, cells):
+    _fused_and_march_agree(z, *cells, directions, radius)
