@@ -27,6 +27,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import platform
 import shutil
 import statistics
 import subprocess
@@ -118,6 +119,29 @@ def table(
     return "\n".join(rows), slower
 
 
+def _toolchain() -> str:
+    """The interpreter, compiler and CPU both trees ran on: a table is comparable with another
+    run's only on the same (numba 0.68's LLVM alone made the sky view's march 4x slower on AMD
+    Zen than the numba the table before it was measured with, and a base-against-head run
+    cannot see that: both trees use the same compiler)."""
+    from importlib import metadata
+
+    parts = [f"Python {platform.python_version()}"]
+    for dist in ("numba", "llvmlite", "numpy", "vtk"):
+        try:
+            parts.append(f"{dist} {metadata.version(dist)}")
+        except metadata.PackageNotFoundError:
+            parts.append(f"{dist} -")
+    cpu = platform.processor() or platform.machine()
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as f:
+            names = (ln.split(":", 1)[1].strip() for ln in f if ln.startswith("model name"))
+            cpu = next(names, cpu)
+    except OSError:
+        pass
+    return ", ".join(parts) + f"; {cpu}, {os.cpu_count()} cores"
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--base", default="HEAD~1", help="base commit (default: HEAD~1)")
@@ -148,6 +172,7 @@ def main(argv: list[str] | None = None) -> int:
             _check_import(path, caches[side])
         labels = (trees["base"][1], trees["head"][1])
         print(f"# base {labels[0]} against head {labels[1]}: {rounds} rounds after a warm-up")
+        print(f"# {_toolchain()}")
         results: dict[str, dict[str, list[float]]] = {"base": {}, "head": {}}
         for r in range(rounds + 1):
             order = ("base", "head") if r % 2 == 0 else ("head", "base")
@@ -163,7 +188,7 @@ def main(argv: list[str] | None = None) -> int:
         text, slower = table(results, labels, args.threshold)
         print(text)
         if args.output is not None:
-            args.output.write_text(text + "\n")
+            args.output.write_text(f"<!-- {_toolchain()} -->\n" + text + "\n")
         return 1 if slower else 0
     finally:
         for side in ("base", "head"):
