@@ -57,19 +57,9 @@ def local_linear_kernel(
     _x_rows(0, 1, np.zeros((1, w)), np.ones((1, w), np.bool_), g, gd, gdd, full_x,
             np.zeros((3, w)), np.zeros(1, np.bool_), 0, w, np.empty(w),
             np.empty(w + 2 * r))  # fmt: skip
-    full_y = np.zeros(6, np.float64)
-    if w > 2 * r:
-        # the y-sums of _v_taps over a full window, in its order (IEEE sums: the same bits)
-        x0, x1, x2 = (float(full_x[f, 0, r]) for f in range(3))
-        m = [0.0] * 6
-        for t in range(2 * r + 1):
-            m[0] += float(g[t]) * x0
-            m[1] += float(gd[t]) * x0
-            m[2] += float(gdd[t]) * x0
-            m[3] += float(g[t]) * x1
-            m[4] += float(gd[t]) * x1
-            m[5] += float(g[t]) * x2
-        full_y[:] = m
+    # the y-sums of a full window (the same bits as from this row: an interior column's
+    # x-sums do not depend on the row's length)
+    full_y = full_moments(g, gd, gdd) if w > 2 * r else np.zeros(6, np.float64)
     row_ok = np.ascontiguousarray(vc.all(axis=1))
     if work is None:
         work = np.empty(5 * h * w, np.float64)
