@@ -428,7 +428,7 @@ def ring_opening(ink: np.ndarray, cut: np.ndarray, min_ring: float, min_stub: fl
     node = np.empty(ink.shape, np.int32)
     order = np.empty(ink.size, np.int32)
     m = _k.ink_order(ink.ravel().view(np.uint32), node.ravel(), order, np.empty(ink.size, np.int32),
-                     np.empty((2, 65537), np.int64))  # fmt: skip
+                     np.empty((4, 257), np.int64))  # fmt: skip
     if m == 0:
         return np.zeros_like(ink)
     order = order[:m]

@@ -233,13 +233,15 @@ def _root(par, x):
 def ink_order(bits, node, order, tmp, hist):
     """The inked pixels (``bits``: the float32 ink's bit patterns; inked: ink > 0) by
     decreasing ink, ties in raster order, into ``order`` (flat indices); ``node`` (flat,
-    int32) their rank, -1 where not inked. Returns their number. A two-pass LSD radix sort
-    on 16-bit digits of ``~bits`` (positive float32 patterns order as their values), stable:
+    int32) their rank, -1 where not inked. Returns their number. A four-pass LSD radix sort
+    on the bytes of ``~bits`` (positive float32 patterns order as their values), stable:
     the order of ``argsort(-ink, kind="stable")`` in linear time. ``tmp``: int32 working
-    array as long as ``order``; ``hist``: int64 (2, 65537)."""
+    array as long as ``order``; ``hist``: int64 (4, 257). Bytes, not two 16-bit digits: the
+    counts then stay in the first-level cache (two 65537-entry tables, zeroed and summed for
+    every tile, were a fifth of a ring-opening tile's time)."""
     n = bits.shape[0]
-    for d in range(2):
-        for k in range(65537):
+    for d in range(4):
+        for k in range(257):
             hist[d, k] = 0
     m = 0
     for p in range(n):
@@ -248,26 +250,30 @@ def ink_order(bits, node, order, tmp, hist):
             node[p] = -1
             continue
         key = np.uint32(0xFFFFFFFF) - b
-        hist[0, (key & np.uint32(0xFFFF)) + 1] += 1
-        hist[1, (key >> np.uint32(16)) + 1] += 1
+        for d in range(4):
+            hist[d, ((key >> np.uint32(8 * d)) & np.uint32(0xFF)) + 1] += 1
         m += 1
-    for d in range(2):
-        for k in range(65536):
+    for d in range(4):
+        for k in range(256):
             hist[d, k + 1] += hist[d, k]
-    for p in range(n):  # by the low digit, raster order within a digit
+    for p in range(n):  # by the lowest byte, raster order within a byte
         b = bits[p]
         if b == 0 or b > np.uint32(0x7F800000):
             continue
-        key = np.uint32(0xFFFFFFFF) - b
-        lo = key & np.uint32(0xFFFF)
-        tmp[hist[0, lo]] = p
+        lo = (np.uint32(0xFFFFFFFF) - b) & np.uint32(0xFF)
+        order[hist[0, lo]] = p
         hist[0, lo] += 1
-    for k in range(m):  # then by the high digit, stable
-        p = tmp[k]
-        hi = (np.uint32(0xFFFFFFFF) - bits[p]) >> np.uint32(16)
-        order[hist[1, hi]] = p
-        hist[1, hi] += 1
-    for k in range(m):
+    for d in range(1, 4):  # then by each higher byte, stable: order -> tmp -> order -> tmp
+        src = order if d % 2 == 1 else tmp
+        dst = tmp if d % 2 == 1 else order
+        shift = np.uint32(8 * d)
+        for k in range(m):
+            p = src[k]
+            digit = ((np.uint32(0xFFFFFFFF) - bits[p]) >> shift) & np.uint32(0xFF)
+            dst[hist[d, digit]] = p
+            hist[d, digit] += 1
+    for k in range(m):  # the last pass ended in tmp
+        order[k] = tmp[k]
         node[order[k]] = k
     return m
 

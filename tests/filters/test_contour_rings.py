@@ -320,7 +320,7 @@ def test_ink_order_is_a_stable_sort_by_decreasing_ink():
     node = np.empty(ink.size, np.int32)
     order = np.empty(ink.size, np.int32)
     m = _contour_kernels.ink_order(ink.view(np.uint32), node, order, np.empty(ink.size, np.int32),
-                                   np.empty((2, 65537), np.int64))  # fmt: skip
+                                   np.empty((4, 257), np.int64))  # fmt: skip
     inked = np.flatnonzero(ink > 0)
     expect = inked[np.argsort(-ink[inked], kind="stable")]
     assert m == inked.size
