@@ -44,6 +44,7 @@ the window's edge and so is wider than ``min_ring``). Chunked evaluation with a 
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 
@@ -258,6 +259,17 @@ def _fused_ok(valid: np.ndarray, inner: tuple[int, int, int, int]) -> bool:
     return bool(valid[r0 - r : r1 + r, c0 - r : c1 + r].all())
 
 
+@functools.cache
+def _fused_constants() -> tuple[list, np.ndarray, np.ndarray]:
+    """The fused route's taps of widths 1, 2, 4, their full-window mask moments and
+    ``1e-3 sigma^4``: the same for every tile, so taken once (the kernel only reads them; they
+    stay writable arrays so that it keeps one compiled signature)."""
+    taps = [_kernels(s) for s in SIGMAS[1:]]
+    full = np.stack([_sk.full_moments(*k) for k in taps])
+    s4 = np.array([1e-3 * s**4 for s in SIGMAS[1:]])
+    return taps, full, s4
+
+
 def _smooth_fused(
     z64: np.ndarray, inner: tuple[int, int, int, int], interval: float,
     into: tuple[np.ndarray, np.ndarray] | None,
@@ -272,9 +284,7 @@ def _smooth_fused(
         if into is None
         else into
     )
-    taps = [_kernels(s) for s in SIGMAS[1:]]
-    full = np.stack([_sk.full_moments(*k) for k in taps])
-    s4 = np.array([1e-3 * s**4 for s in SIGMAS[1:]])
+    taps, full, s4 = _fused_constants()
     n = min(FUSED_COLS, c1 - c0)
     for a in range(c0, c1, n):
         b = min(a + n, c1)
