@@ -680,24 +680,20 @@ def _fused_and_march_agree(z, dx, dy, directions, radius):
     inverted terrain (negative openness), NaN at the same cells."""
     zz = T._prepare(z, dx, dy, 1.0, None)
     r = T.default_sky_radius(dx, dy) if radius is None else radius
-    worst = 0.0
     for grid in (zz, -zz):
         rays = T._sky_rays(grid, dx, dy, directions, r, local=False)
         for fast, march in ((K.sky_view_kernel, K.sky_view_march_kernel),
                             (K.openness_kernel, K.openness_march_kernel)):  # fmt: skip
             a, b = fast(grid, *rays), march(grid, *rays)
             np.testing.assert_array_equal(np.isnan(a), np.isnan(b))
-            with np.errstate(invalid="ignore"):
-                worst = max(worst, float(np.nanmax(np.abs(a - b), initial=0.0)))
-            np.testing.assert_array_equal(a, b)
-    return worst
+            np.testing.assert_array_equal(a, b)  # the same bits (NaN where nodata)
 
 
 @pytest.mark.parametrize("beta", [2.2, 2.8, 3.4])
 @pytest.mark.parametrize(("dx", "dy"), [(30.0, 30.0), (30.0, 18.0), (10.0, 25.0)])
 def test_fused_march_on_fractal_terrain(beta, dx, dy):
     z = _spectral(150, 233, beta, seed=int(beta * 10))
-    assert _fused_and_march_agree(z, dx, dy, 16, None) == 0.0
+    _fused_and_march_agree(z, dx, dy, 16, None)
 
 
 @pytest.mark.parametrize("case", ["integer", "holes", "canyons"])
@@ -713,7 +709,7 @@ def test_fused_march_on_hard_terrain(case):
     else:
         z = _canyons(140, 210)
     for directions, radius, dx, dy in ((16, None, 1.0, 1.0), (7, 40.0, 1.0, 0.6), (32, 25.0, 2, 1)):
-        assert _fused_and_march_agree(z, dx, dy, directions, radius) == 0.0
+        _fused_and_march_agree(z, dx, dy, directions, radius)
 
 
 @pytest.mark.parametrize(
@@ -730,7 +726,7 @@ def test_fused_march_on_real_dems(name):
     dx, dy = (abs(float(v)) for v in dem.pixel_size)  # metres, geographic grids too
     if z.shape[0] > 400:  # the 1201^2 SRTM tile: a crop keeps the test short
         z = z[200:520, 300:700]
-    assert _fused_and_march_agree(z, dx, dy, 16, None) == 0.0
+    _fused_and_march_agree(z, dx, dy, 16, None)
 
 
 @settings(max_examples=60, deadline=None)
