@@ -37,8 +37,8 @@ from vtkmodules.vtkCommonCore import vtkFloatArray
 
 import sciviz_gbuf as sg
 from sciviz_gbuf import pyvista_plugin  # noqa: F401  (registers .gbuf without entry points)
-from sciviz_gbuf._live import EdgeParams, overlay_rgba
 from sciviz_gbuf.core import CameraInfo, gbuffer_from_zbuffer, read_zbuffer
+from sciviz_gbuf.live import EdgeParams, overlay_rgba
 
 STL = Path(__file__).resolve().parents[2] / "shared" / "data" / "meshes" / "vtkdata_42400-IDGH.stl"
 

@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 import pyvista as pv
 
-from . import _live
+from . import live as _live
 from .core.capture import capture as _capture
 from .core.gbuffer import GBuffer
 from .errors import InputError
@@ -370,8 +370,12 @@ class GBufPlotterComponent:
             Default white and black.
         opacity : float in [0, 1], default: 1
             Scales the edge ink.
-        source : {"auto", "frame", "capture"}, default: "auto"
-            Where the edges come from. ``frame``: the depth of the frame being drawn, read
+        source : {"auto", "frame", "capture", "gpu"}, default: "auto"
+            Where the edges come from. ``gpu``: fragment shaders inside the frame read its
+            depth and draw the edge map into it (no read-back; styles ``enhance`` and
+            ``profile``, supersample 1; see :mod:`sciviz_gbuf.live.gpu`); ``auto`` takes it
+            where the GL renderer is a graphics card's, and ``pl.gbuf.live.route`` says
+            which route drew the last frame. ``frame``: the depth of the frame being drawn, read
             back once the subplot is drawn (no second render: the cost is the read-back and the
             edge map; normals from the depth, see :mod:`sciviz_gbuf.core.frame`; supersample
             1). ``capture``: a separate offscreen render of the subplot's surfaces (exact
@@ -380,7 +384,8 @@ class GBufPlotterComponent:
             ``capture``. With multisampling (PyVista's default anti-aliasing), the driver's
             depth resolve moves ``frame`` lines by up to a pixel, and a render pass of the
             subplot (SSAA, EDL, SSAO) draws into buffers of its own: ``auto`` captures there;
-            ``pl.disable_anti_aliasing()`` lets it take the frame.
+            ``pl.disable_anti_aliasing()`` lets it take the frame. Where the GPU route cannot
+            draw (no depth to read), it warns once and the capture route takes over.
 
         Returns
         -------
@@ -412,10 +417,13 @@ class GBufPlotterComponent:
             source=source,
         )
         renderer = self._plotter.renderer
-        self.disable_edge_enhancement()
-        live = _live.LiveEdges(self._plotter, renderer, params)
-        live.attach()
-        self._live[id(renderer)] = live
+        live = self._live.get(id(renderer))
+        if live is not None:
+            live.set_params(params)  # its session, textures and programs kept
+        else:
+            live = _live.LiveEdges(self._plotter, renderer, params)
+            live.attach()
+            self._live[id(renderer)] = live
         self._rerender()
         return self._plotter
 

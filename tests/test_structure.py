@@ -37,7 +37,8 @@ LAYERS = (
     ("writers",),
     ("compose",),
     ("recipes",),
-    ("pyvista_plugin", "vtk_algorithms", "_live"),
+    ("live",),
+    ("pyvista_plugin", "vtk_algorithms"),
     ("apps",),
     ("cli",),
 )
@@ -308,8 +309,8 @@ def test_style_registry_serves_every_front_end():
     npr = styles.styles_for("npr")
     aliases = {a for s in styles.STYLES.values() if "npr" in s.fronts for a in s.aliases}
     assert set(mesh.choices) == set(npr) | aliases
-    from sciviz_gbuf._live import LIVE_STYLES
     from sciviz_gbuf.apps.explorer import STYLES as EXPLORER_STYLES
+    from sciviz_gbuf.live import LIVE_STYLES
     from sciviz_gbuf.styles.fused import FUSED_MODES
 
     assert LIVE_STYLES == styles.styles_for("live")

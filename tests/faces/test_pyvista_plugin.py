@@ -16,9 +16,9 @@ from vtkmodules.util.numpy_support import vtk_to_numpy
 
 import sciviz_gbuf as sg
 from sciviz_gbuf import pyvista_plugin
-from sciviz_gbuf._live import overlay_rgba
 from sciviz_gbuf.errors import InputError
 from sciviz_gbuf.filters import edge_map
+from sciviz_gbuf.live import overlay_rgba
 from sciviz_gbuf.readers import read_dem
 from sciviz_gbuf.styles.illustration import illustrate
 
@@ -365,7 +365,7 @@ def test_live_auto_captures_where_the_frame_depth_is_not_exact(nut):
     near = ndimage.binary_dilation(black)
     assert near[emap[..., 3] >= 0.9].mean() >= 0.95
     with pytest.raises(InputError, match="source"):
-        pl.gbuf.enable_edge_enhancement(source="gpu")
+        pl.gbuf.enable_edge_enhancement(source="shader")
     with pytest.raises(InputError, match="supersample"):
         pl.gbuf.enable_edge_enhancement(source="frame", supersample=2)
     pl.close()

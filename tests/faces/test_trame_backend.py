@@ -29,7 +29,7 @@ from pyvista import examples
 from scipy import ndimage
 
 import sciviz_gbuf as sg
-from sciviz_gbuf import _live
+from sciviz_gbuf import live as _live
 from sciviz_gbuf.filters import edge_map
 
 trame_pyvista = pytest.importorskip("trame_pyvista", reason="needs trame-pyvista (PyVista>=0.49)")

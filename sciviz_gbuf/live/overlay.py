@@ -24,6 +24,12 @@ so they show the plain scene: ``jupyter_backend='client'`` (``PyVistaLocalView``
 ``'wasm'``, and the ``'trame'`` view after its toggle is switched to client-side rendering.
 On the plotter's ``render()`` calls (``show()`` makes one after creating the view) we look the
 plotter up in trame-pyvista's viewer registry and warn once if a client-side view shows it.
+
+The GPU route (``source="gpu"``, :mod:`.gpu`) draws no image of ours: at the enhanced
+renderer's ``EndEvent`` its shaders read the frame's own depth and blend the edges into the
+subplot, every frame, with no read-back. Where it cannot (a window without a depth texture, a
+context without float textures or the shaders), it warns once and the CPU capture route takes
+over.
 """
 
 from __future__ import annotations
@@ -40,18 +46,20 @@ from vtkmodules.vtkCommonCore import vtkFloatArray
 from vtkmodules.vtkCommonDataModel import vtkImageData
 from vtkmodules.vtkRenderingCore import vtkActor2D, vtkImageMapper, vtkRenderer
 
-from . import _validate
-from .core.camera import CameraInfo
-from .core.capture import CaptureSession
-from .core.frame import gbuffer_from_zbuffer, read_zbuffer
-from .core.gbuffer import GBuffer
-from .errors import InputError
-from .filters import edge_map, profile_and_crease_edges
-from .styles import check_style, styles_for
-from .styles.illustration import fig7_edge_map
+from .. import _validate
+from ..core.camera import CameraInfo
+from ..core.capture import CaptureSession
+from ..core.frame import gbuffer_from_zbuffer, read_zbuffer
+from ..core.gbuffer import GBuffer
+from ..errors import InputError
+from ..filters import edge_map, profile_and_crease_edges
+from ..styles import check_style, styles_for
+from ..styles.illustration import fig7_edge_map
+from .gpu import GpuEdgePass, GpuUnavailable, gl_info, is_hardware
 
 __all__ = [
     "CLIENT_SIDE_WARNING",
+    "GPU_STYLES",
     "LIVE_STYLES",
     "SOURCES",
     "EdgeParams",
@@ -75,11 +83,18 @@ CLIENT_SIDE_WARNING = (
 #: styles registry.
 LIVE_STYLES = styles_for("live")
 
-#: Where the overlay's G-buffer comes from: ``capture`` renders the subplot's scene once more
+#: Where the overlay's edges come from: ``capture`` renders the subplot's scene once more
 #: offscreen (exact channels, any supersample); ``frame`` reads the depth of the frame being
-#: drawn (no second render; see :mod:`sciviz_gbuf.core.frame`); ``auto`` takes ``frame``
-#: where it is exact (a window without multisampling, supersample 1), else ``capture``.
-SOURCES = ("auto", "capture", "frame")
+#: drawn back to the CPU (no second render; see :mod:`sciviz_gbuf.core.frame`); ``gpu``
+#: computes the edge map from that depth in shaders inside the frame (:mod:`.gpu`: no
+#: read-back, supersample 1, the styles of :data:`GPU_STYLES`); ``auto`` takes ``gpu`` where
+#: the GL renderer is a graphics card's, else ``frame`` where it is exact (a window without
+#: multisampling, supersample 1), else ``capture``.
+SOURCES = ("auto", "capture", "frame", "gpu")
+
+#: Styles the GPU route draws (the 2003 edge map); ``lines`` and ``fig7`` clean and thin
+#: whole lines (connected pieces, hysteresis), which stay on the CPU routes.
+GPU_STYLES = ("enhance", "profile")
 
 
 def _color(value: object, name: str) -> tuple[float, float, float]:
@@ -130,10 +145,15 @@ class EdgeParams:
         ):
             raise InputError(f"supersample: expected an integer in [1, 4], got {supersample!r}")
         source = _validate.choice(source, "source", SOURCES)
-        if source == "frame" and supersample != 1:
+        if source in ("frame", "gpu") and supersample != 1:
             raise InputError(
-                "supersample: source='frame' reads the frame's own depth, at its own size: "
+                f"supersample: source={source!r} reads the frame's own depth, at its own size: "
                 f"expected 1, got {supersample!r}"
+            )
+        if source == "gpu" and style not in GPU_STYLES:
+            raise InputError(
+                f"style: source='gpu' draws {' or '.join(map(repr, GPU_STYLES))}, got "
+                f"{style!r} (its lines are cleaned on the CPU: use source='capture' or 'frame')"
             )
         return cls(
             style=style,
@@ -273,10 +293,15 @@ class LiveEdges:
         self._observer: int | None = None
         self._overlay_observer: int | None = None
         self._zbuffer = vtkFloatArray()  # the frame route's read-back, kept between frames
-        #: The route of the last update: "capture" or "frame".
+        #: The route of the last frame: "capture", "frame" or "gpu".
         self.route: str | None = None
         self._layer: int | None = None
         self._warned_client_side = False
+        self._end_observer: int | None = None
+        self._gpu: GpuEdgePass | None = None
+        #: Why the GPU route cannot draw in this window (None: it can, or was not tried).
+        self.gpu_unavailable: str | None = None
+        self._hardware: bool | None = None  # the window's GL renderer, once known
 
     # ------------------------------------------------------------------ lifecycle
     def attach(self) -> None:
@@ -295,6 +320,8 @@ class LiveEdges:
         # The overlay's own renderer starts after every lower layer is drawn: the frame route
         # reads the enhanced subplot's depth there, before the overlay draws over it.
         self._overlay_observer = self._overlay.AddObserver("StartEvent", self._on_overlay_start)
+        # The GPU route draws into the frame once the subplot is drawn, before later layers.
+        self._end_observer = self._renderer.AddObserver("EndEvent", self._on_renderer_end)
         # PyVista calls these on every plotter.render(), even when rendering is suppressed
         self._plotter.add_on_render_callback(self._on_plotter_render, render_event=False)
         self._on_plotter_render(self._plotter)
@@ -310,6 +337,10 @@ class LiveEdges:
         if self._overlay_observer is not None:
             self._overlay.RemoveObserver(self._overlay_observer)
             self._overlay_observer = None
+        if self._end_observer is not None:
+            self._renderer.RemoveObserver(self._end_observer)
+            self._end_observer = None
+        self._release_gpu()
         # PyVista has no public way to remove one render callback (only to clear them all)
         callbacks = getattr(self._plotter, "_on_render_callbacks", None)
         if callbacks is not None:
@@ -327,6 +358,29 @@ class LiveEdges:
         self._layer = None
         self._key = None
         self._close_session()
+
+    def _release_gpu(self) -> None:
+        if self._gpu is not None:
+            self._gpu.release()
+        self._gpu = None
+
+    def set_params(self, params: EdgeParams) -> None:
+        """New parameters for the next frame: the capture session, the GPU route's programs
+        and textures are kept (on the GPU they are uniforms: nothing is compiled)."""
+        self.params = params
+        self._key = None
+
+    @property
+    def gpu_frames(self) -> int:
+        """Frames the GPU route has drawn (every frame while it is the route)."""
+        return 0 if self._gpu is None else self._gpu.frames
+
+    def gpu_edge_planes(self) -> tuple[np.ndarray, np.ndarray]:
+        """The GPU route's last inner-edge and profile planes, (H, W) float32, row 0 on top
+        (read back from the GPU: for tests and checks)."""
+        if self._gpu is None:
+            raise InputError("gpu_edge_planes: the GPU route has not drawn a frame")
+        return self._gpu.edge_planes()
 
     def _close_session(self) -> None:
         if self._session is not None:
@@ -386,9 +440,30 @@ class LiveEdges:
             )
         return tuple(props)
 
-    def _route(self) -> str:
-        """``frame`` or ``capture`` for this frame (see :data:`SOURCES`)."""
+    def _gpu_wanted(self) -> bool:
+        """Whether this frame goes to the GPU route (``gpu``, or ``auto`` on a graphics card)."""
+        if self.gpu_unavailable is not None:
+            return False
         source = self.params.source
+        if source == "gpu":
+            return True
+        if source != "auto" or self.params.style not in GPU_STYLES:
+            return False
+        if self.params.supersample != 1 or self._window is None:
+            return False
+        if self._hardware is None:
+            if not gl_info(self._window)["renderer"]:
+                return False  # no frame rendered yet: no context to ask; next frame
+            self._hardware = is_hardware(self._window)
+        return self._hardware
+
+    def _route(self) -> str:
+        """``gpu``, ``frame`` or ``capture`` for this frame (see :data:`SOURCES`)."""
+        if self._gpu_wanted():
+            return "gpu"
+        source = self.params.source
+        if source == "gpu":
+            return "capture"  # the GPU route cannot draw here (warned once)
         if source == "auto":
             # Exact only where the depth is the pixel centre's: one sample per pixel, drawn by
             # the renderer itself (a render pass such as PyVista's SSAA, EDL or SSAO draws
@@ -401,8 +476,35 @@ class LiveEdges:
 
     def _on_start(self, _obj: object, _event: str) -> None:
         """The window starts a frame: the capture route updates before anything is drawn."""
-        if self._route() == "capture":
+        route = self._route()
+        if route == "gpu" and self.route != "gpu":
+            self._set_pixels(np.zeros((1, 1, 4), np.uint8))  # no CPU image over its lines
+            self._key = None
+        if route == "capture":
             self._refresh("capture")
+
+    def _gpu_failed(self, why: str) -> None:
+        """Give up the GPU route in this window and say so once; the CPU routes take over."""
+        self.gpu_unavailable = why
+        self._release_gpu()
+        warnings.warn(f"sciviz_gbuf live edges: the GPU route cannot draw here ({why}); "
+                      "using the CPU capture route", RuntimeWarning, stacklevel=2)  # fmt: skip
+
+    def _on_renderer_end(self, renderer: Any, _event: str) -> None:
+        """The subplot is drawn, its framebuffer bound: the GPU route draws into it now."""
+        if self._busy or renderer.GetSelector() is not None:
+            return  # a hardware selector's frame holds ids, not colours: leave it alone
+        if self._route() != "gpu" or self._window is None:
+            return
+        try:
+            if self._gpu is None:
+                self._gpu = GpuEdgePass(self._window)
+            self._gpu.draw(renderer, self.params)
+            self.route = "gpu"
+        except GpuUnavailable as exc:
+            # this frame goes without edges (a capture now would switch GL contexts in the
+            # middle of the user's frame); the next frame captures on the CPU
+            self._gpu_failed(str(exc))
 
     def _on_overlay_start(self, _obj: object, _event: str) -> None:
         """The subplot is drawn, the overlay is next: the frame route reads its depth now."""
