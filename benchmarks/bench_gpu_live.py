@@ -24,6 +24,12 @@ the frame), ``frame`` (the frame's depth read back, the edge map on the CPU) and
 camera, so the CPU routes make a new G-buffer every frame. Untimed warm-up frames first;
 the best of ``--repeat`` runs. ``ratio``: edges fps / plain fps in the same window.
 
+Then the live contour lines (``pl.gbuf.enable_contour_lines``: Eq. 7-15 in the actor's own
+fragment shader, one pass) on a DEM surface in UTM coordinates (400 x 300 cells of 30 m) and
+on the 1M-triangle surface: in one window, ``--rounds`` rounds of ``--frames`` plain
+frames, then as many with the lines (20 m levels, 100 m majors; the same orbit); fps from
+the median frame time, the ratio of the medians and the range of the per-round ratios.
+
 ``--check`` asserts, for every mesh and size, that the GPU route's edge planes agree with
 ``capture`` + ``edge_map`` of the same camera: >= 95 % of the strong pixels of each within one
 pixel of the other's, profile recall >= 0.98 (exit status 1 if not).
@@ -89,6 +95,51 @@ def fps(mesh: pv.DataSet, size: tuple[int, int], frames: int, source: str | None
     return frames / dt
 
 
+def dem_surface() -> pv.PolyData:
+    """400 x 300 cells of 30 m in UTM coordinates (x ~ 4.5e5, y ~ 4.4e6), 1700-2300 m."""
+    y, x = np.mgrid[0:300, 0:400] * 30.0
+    z = 2000 + 300 * np.sin(x / 900) * np.cos(y / 700) + 0.04 * x
+    grid = pv.StructuredGrid(x + 4.5e5, y + 4.4e6, z)
+    return grid.extract_surface(algorithm="dataset_surface").triangulate()
+
+
+def frame_times(pl: pv.Plotter, frames: int) -> list[float]:
+    """Seconds of each of ``frames`` orbit frames (render + glFinish), after one untimed."""
+    window = pl.render_window
+    pl.render()
+    window.WaitForCompletion()
+    out = []
+    for _ in range(frames):
+        pl.camera.azimuth += 3.0
+        t0 = time.perf_counter()
+        pl.render()
+        window.WaitForCompletion()
+        out.append(time.perf_counter() - t0)
+    return out
+
+
+def contour_rounds(mesh: pv.DataSet, size: tuple[int, int], frames: int, rounds: int, height: bool):
+    """(plain fps, lines fps, per-round ratios) in one window, plain and lines alternating in
+    blocks of ``frames`` frames; fps from the median frame time (a shared VM's stalls hit
+    single frames, which a median leaves out)."""
+    pl = plotter(mesh, size)
+    actor = next(iter(pl.renderer.actors.values()))
+    opts = {"interval": 20.0, "major_interval": 100.0} if height else {"interval": 0.25}
+    plain: list[float] = []
+    lines: list[float] = []
+    ratios = []
+    for _ in range(rounds):
+        pl.gbuf.disable_contour_lines()
+        a = frame_times(pl, frames)
+        pl.gbuf.enable_contour_lines(actor, height="z", **opts)
+        b = frame_times(pl, frames)
+        plain += a
+        lines += b
+        ratios.append(float(np.median(a) / np.median(b)))
+    pl.close()
+    return 1.0 / float(np.median(plain)), 1.0 / float(np.median(lines)), ratios
+
+
 def check(mesh: pv.DataSet, size: tuple[int, int]) -> tuple[float, float, float]:
     """(precision, recall, profile recall) of the GPU route against capture + edge_map."""
     pl = plotter(mesh, size)
@@ -115,6 +166,8 @@ def main() -> int:
     ap.add_argument("--sizes", default="1024x768,1920x1080")
     ap.add_argument("--no-big", action="store_true", help="leave out the 1M-triangle surface")
     ap.add_argument("--check", action="store_true", help="only check the GPU route's edges")
+    ap.add_argument("--rounds", type=int, default=5, help="rounds of the contour-line runs")
+    ap.add_argument("--no-edges", action="store_true", help="only the contour-line table")
     args = ap.parse_args()
     sizes = [tuple(int(v) for v in s.split("x")) for s in args.sizes.split(",")]
     meshes = {"nut": examples.load_nut()}
@@ -141,22 +194,43 @@ def main() -> int:
                 print(f"{name:9s} {size[0]:4d}x{size[1]:<4d} {p:9.3f} {r:7.3f} {pr:8.3f}"
                       f"{'' if good else '  FAILED'}")  # fmt: skip
         return 0 if ok else 1
-    print(f"orbit + render + glFinish, {args.frames} frames, best of {args.repeat}")
+    if not args.no_edges:
+        edge_table(meshes, sizes, args.frames, args.repeat)
+    print(f"\nlive contour lines, {args.frames} frames a run, {args.rounds} rounds "
+          "(plain, lines) in one window")  # fmt: skip
+    print(f"{'mesh':9s} {'cells':>7s} {'window':>9s} {'plain fps':>9s} {'lines fps':>9s} "
+          f"{'ratio':>6s} {'range':>11s}")  # fmt: skip
+    surfaces = {"dem_utm": (dem_surface(), True)}
+    if "hills_1M" in meshes:
+        surfaces["hills_1M"] = (meshes["hills_1M"], False)
+    for name, (mesh, height) in surfaces.items():
+        for size in sizes:
+            p, f, r = contour_rounds(mesh, size, args.frames, args.rounds, height)
+            print(f"{name:9s} {mesh.n_cells:7d} {size[0]:4d}x{size[1]:<4d} {p:9.1f} {f:9.1f} "
+                  f"{f / p:6.2f} {min(r):5.2f}-{max(r):4.2f}", flush=True)  # fmt: skip
+    print("lines: 20 m levels, 100 m majors on the DEM (world height); levels 0.25 on the")
+    print("hills (world z); fps from median frame times; ratio = lines fps / plain fps, with")
+    print("the range of the rounds' ratios.")
+    return 0
+
+
+def edge_table(meshes: dict, sizes: list, frames: int, repeat: int) -> None:
+    """The edge overlay's fps per route."""
+    print(f"orbit + render + glFinish, {frames} frames, best of {repeat}")
     head = f"{'mesh':9s} {'cells':>7s} {'window':>9s} {'plain fps':>9s}"
     for route in ROUTES:
         head += f" {route:>8s} {'ratio':>6s}"
     print(head)
     for name, mesh in meshes.items():
         for size in sizes:
-            plain = max(fps(mesh, size, args.frames, None) for _ in range(args.repeat))
+            plain = max(fps(mesh, size, frames, None) for _ in range(repeat))
             row = f"{name:9s} {mesh.n_cells:7d} {size[0]:4d}x{size[1]:<4d} {plain:9.1f}"
             for route in ROUTES:
-                f = max(fps(mesh, size, args.frames, route) for _ in range(args.repeat))
+                f = max(fps(mesh, size, frames, route) for _ in range(repeat))
                 row += f" {f:8.1f} {f / plain:6.2f}"
             print(row, flush=True)
     print("fps per route: gpu = shaders inside the frame, frame = depth read back + CPU edge")
     print("map, capture = a second offscreen render + CPU edge map; ratio = fps / plain fps.")
-    return 0
 
 
 if __name__ == "__main__":

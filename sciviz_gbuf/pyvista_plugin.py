@@ -316,6 +316,8 @@ class GBufPlotterComponent:
         self._plotter = plotter
         # one live overlay per enhanced renderer (subplot), keyed by the renderer's id
         self._live: dict[int, _live.LiveEdges] = {}
+        # live contour lines per actor, keyed by the actor's VTK address
+        self._contours: dict[str, _live.LiveContours] = {}
 
     def capture(self, **kwargs: Any) -> pv.ImageData:
         """G-buffer of the active subplot (its visible actors and camera) as an ImageData.
@@ -470,10 +472,135 @@ class GBufPlotterComponent:
         """The live overlay of the active subplot (its ``updates`` count, last G-buffer)."""
         return self._live.get(id(self._plotter.renderer))
 
+    def enable_contour_lines(
+        self,
+        actor: Any = None,
+        *,
+        interval: float,
+        scalars: str | None = None,
+        height: str | Sequence[float] | None = None,
+        major_interval: float | None = None,
+        base: float = 0.0,
+        width: float = 1.0,
+        major_width: float | None = None,
+        profile: str = "linear",
+        color: Sequence[float] = (0.0, 0.0, 0.0),
+        opacity: float = 1.0,
+        c_dense: float | None = None,
+        dense_spacing: float | None = None,
+        g_eps: float | None = None,
+        c_sparse: float = 0.0,
+    ) -> Any:
+        """Draw contour lines on a surface actor, live, in the actor's own shaders.
+
+        Saito & Takahashi's image-space contour lines (1990 Eq. 7-15), as
+        :func:`sciviz_gbuf.filters.contour_lines` draws them, evaluated per fragment while
+        the actor is drawn: one pass, no capture and no read-back (on a 2-core Mesa llvmpipe
+        machine 0.86-0.91x the plain frame rate). A bird's-eye topographic map you can orbit:
+        ``pl.gbuf.enable_contour_lines(actor, interval=20, major_interval=100)``. Calling it
+        again for the same actor changes the parameters (nothing is compiled).
+
+        Parameters
+        ----------
+        actor : vtkActor, optional
+            The surface (what ``pl.add_mesh`` returns). Default: the active subplot's only
+            mesh actor.
+        interval : float > 0
+            Level spacing ``q`` of Eq. 12, in field units.
+        scalars : str, optional
+            A one-component point array of the actor's data to draw the levels of (e.g.
+            ``"Elevation"`` from ``mesh.elevation()``, a temperature, a CT value).
+        height : {"x", "y", "z"} or 3-vector, optional
+            The world coordinate along this axis as the field (default ``"z"`` when
+            ``scalars`` is not given): heights of a terrain, at any model transform.
+        major_interval, base, width, major_width, profile, c_dense, dense_spacing, g_eps,
+        c_sparse
+            As in :func:`sciviz_gbuf.filters.contour_lines` (widths in screen pixels; minors
+            fade where they crowd, majors never).
+        color : RGB floats in [0, 1], default: black
+        opacity : float in [0, 1], default: 1
+
+        Returns
+        -------
+        pyvista.Plotter
+            The plotter, so calls chain.
+
+        Notes
+        -----
+        Eq. 9's gradient is the field's screen-space derivative, exact for the field VTK
+        interpolates linearly across each triangle. A level the surface nears without
+        crossing (a summit within half a line width below it) draws a short mark that
+        :func:`~sciviz_gbuf.filters.contour_lines` omits (it sees the neighbouring pixels);
+        the maps' generalisation (smoothing, ring removal) is not applied.
+        """
+        options = _live.contour_options(
+            interval=interval, major_interval=major_interval, base=base, width=width,
+            major_width=major_width, profile=profile, c_dense=c_dense,
+            dense_spacing=dense_spacing, g_eps=g_eps, c_sparse=c_sparse, color=color,
+            opacity=opacity,
+        )  # fmt: skip
+        actor = self._contour_actor(actor)
+        field = _live.ContourField.checked(actor, scalars, height)
+        key = actor.__this__
+        live = self._contours.get(key)
+        if live is not None and vars(live.field) == vars(field):
+            live.set_options(options)
+        else:
+            if live is not None:
+                live.detach()
+            live = _live.LiveContours(self._plotter, actor, field, options)
+            live.attach()
+            self._contours[key] = live
+        self._rerender()
+        return self._plotter
+
+    def disable_contour_lines(self, actor: Any = None) -> Any:
+        """Remove the live contour lines of ``actor`` (default: every actor that has them);
+        the next frame is the plain one, bit for bit.
+
+        Returns
+        -------
+        pyvista.Plotter
+            The plotter, so calls chain.
+        """
+        keys = list(self._contours) if actor is None else [getattr(actor, "__this__", None)]
+        removed = False
+        for key in keys:
+            live = self._contours.pop(key, None)
+            if live is not None:
+                live.detach()
+                removed = True
+        if removed:
+            self._rerender()
+        return self._plotter
+
+    @property
+    def contour_lines_enabled(self) -> bool:
+        """Whether any actor of the plotter has live contour lines."""
+        return bool(self._contours)
+
+    def _contour_actor(self, actor: Any) -> Any:
+        if actor is not None:
+            return actor
+        actors = [
+            a
+            for a in self._plotter.renderer.actors.values()
+            if hasattr(a, "GetMapper") and a.GetMapper() is not None and a.GetVisibility()
+            and hasattr(a, "GetShaderProperty")
+        ]  # fmt: skip
+        if len(actors) != 1:
+            raise InputError(
+                f"actor: the active subplot has {len(actors)} mesh actors; pass the one to draw "
+                "contour lines on (pl.add_mesh returns it)"
+            )
+        return actors[0]
+
     def _drop_all(self) -> None:
         # closing: no re-render, the window is going away
         for key in reversed(list(self._live)):
             self._live.pop(key).detach()
+        for key in list(self._contours):
+            self._contours.pop(key).detach()
 
     def __plotter_close__(self) -> None:
         """PyVista lifecycle hook: drop every overlay and observer when the plotter closes."""

@@ -18,6 +18,7 @@ _EXPORTS = {
     "contour_polylines": "contour_vectors",
     "polylines_to_geojson": "contour_vectors",
     "band_heights": "contours",
+    "contour_line_parameters": "contours",
     "contour_lines": "contours",
     "hatching": "contours",
     "modulated_hatching": "contours",
@@ -69,6 +70,7 @@ __all__ = [
     "cast_shadows",
     "color_bands",
     "composite_map",
+    "contour_line_parameters",
     "contour_lines",
     "contour_polylines",
     "crease_edges",
@@ -112,7 +114,13 @@ lazy_exports(__name__, _EXPORTS)
 if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerly
     from .bands import BATHYMETRIC, HYPSOMETRIC, color_bands, composite_map
     from .contour_vectors import ContourPolyline, contour_polylines, polylines_to_geojson
-    from .contours import band_heights, contour_lines, hatching, modulated_hatching
+    from .contours import (
+        band_heights,
+        contour_line_parameters,
+        contour_lines,
+        hatching,
+        modulated_hatching,
+    )
     from .edges import (
         crease_edges,
         edge_map,

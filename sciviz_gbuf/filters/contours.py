@@ -37,6 +37,7 @@ from . import _stencil_kernels as _stencil
 __all__ = [
     "band_heights",
     "contour_halo",
+    "contour_line_parameters",
     "contour_lines",
     "generalized_field",
     "hatching",
@@ -379,6 +380,58 @@ def contour_halo(*, generalize: bool = False, min_ring: float | None = None, **o
     args.update(options)
     _, prm = _contour_params(interval, levels, **args)
     return _halo(_ring(generalize, min_ring, None, prm))
+
+
+#: The per-pixel parameters of regular contour lines by name (the kernel's ``prm`` slots).
+_NAMED_SLOTS = {
+    "base": _p.BASE,
+    "q": _p.Q,
+    "line_a": _p.LINE_A,
+    "line_cap": _p.LINE_CAP,
+    "line_b": _p.LINE_B,
+    "p1": _p.P1,
+    "p2": _p.P2,
+    "p3": _p.P3,
+    "inv_geps": _p.INV_GEPS,
+    "c_sparse": _p.C_SPARSE,
+    "c_dense": _p.C_DENSE,
+    "dense_at": _p.DENSE_AT,
+    "inv_d": _p.INV_D,
+    "major_q": _p.MAJOR_Q,
+    "major_a": _p.MAJOR_A,
+    "major_cap": _p.MAJOR_CAP,
+}
+
+
+def contour_line_parameters(
+    *,
+    interval: float,
+    base: float = 0.0,
+    width: float = 1.0,
+    profile: str = "linear",
+    g_eps: float | None = None,
+    c_sparse: float = 0.0,
+    c_dense: float | None = None,
+    dense_spacing: float | None = None,
+    major_interval: float | None = None,
+    major_width: float | None = None,
+) -> dict[str, float]:
+    """The checked per-pixel parameters of :func:`contour_lines` with regular levels, by name:
+    what its kernel evaluates Eq. 7-15 with, for a renderer that evaluates them elsewhere
+    (the live overlay's fragment shader, :mod:`sciviz_gbuf.live.contours`), so both draw
+    the same lines from the same numbers.
+
+    The arguments are those of :func:`contour_lines` (same checks, same errors). The line
+    profile at ``t`` px from a line's centre is ``cap P(clip(a - b t, 0, 1))`` with
+    ``P(v) = v (p1 + v (p2 + v p3))``; ``dense_at`` is ``-1e30`` without dense handling,
+    ``major_q`` 0 without majors, ``inv_geps`` ``1e30`` for ``g_eps = 0``.
+    """
+    _, prm = _contour_params(
+        interval, None, base, width, profile, g_eps, c_sparse, c_dense, dense_spacing,
+        major_interval, major_width,
+    )  # fmt: skip
+    prm32 = prm.astype(np.float32)  # as the kernel reads them
+    return {name: float(prm32[i]) for name, i in _NAMED_SLOTS.items()}
 
 
 def _contour_params(

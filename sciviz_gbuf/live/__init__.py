@@ -9,6 +9,7 @@ is tested against.
 
 from __future__ import annotations
 
+from .contours import AXES, ContourField, LiveContours, contour_options
 from .gpu import SOFTWARE_RENDERERS, GpuEdgePass, GpuUnavailable, gl_info, is_hardware
 from .overlay import (
     CLIENT_SIDE_WARNING,
@@ -22,16 +23,20 @@ from .overlay import (
 )
 
 __all__ = [
+    "AXES",
     "CLIENT_SIDE_WARNING",
     "GPU_STYLES",
     "LIVE_STYLES",
     "SOFTWARE_RENDERERS",
     "SOURCES",
+    "ContourField",
     "EdgeParams",
     "GpuEdgePass",
     "GpuUnavailable",
+    "LiveContours",
     "LiveEdges",
     "client_side_views",
+    "contour_options",
     "gl_info",
     "is_hardware",
     "overlay_rgba",

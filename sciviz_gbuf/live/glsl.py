@@ -29,7 +29,18 @@ unused input is optimised away and VTK reports the missing attribute).
 
 from __future__ import annotations
 
-__all__ = ["COMPOSITE_FS", "EDGE_FS", "GBUFFER_FS", "gbuffer_fs"]
+__all__ = [
+    "COMPOSITE_FS",
+    "CONTOUR_FS_DEC",
+    "CONTOUR_FS_IMPL",
+    "CONTOUR_VS_DEC_HEIGHT",
+    "CONTOUR_VS_DEC_SCALAR",
+    "CONTOUR_VS_IMPL_HEIGHT",
+    "CONTOUR_VS_IMPL_SCALAR",
+    "EDGE_FS",
+    "GBUFFER_FS",
+    "gbuffer_fs",
+]
 
 _HEAD = """//VTK::System::Dec
 //VTK::Output::Dec
@@ -272,3 +283,96 @@ void main()
 }
 """
 )
+
+
+# --------------------------------------------------------------------------- contour lines
+#
+# Replacements in the actor's own shaders (vtkShaderProperty), so the lines cost one pass:
+# the field goes from the vertex shader to the fragment shader as a varying (a point array
+# mapped to the vertex attribute ``sgContourScalar``, or the world height unprojected from
+# the clip position with the camera's inverse), and the fragment shader draws
+# :func:`sciviz_gbuf.filters.contour_lines`' Eq. 7-15 after VTK's lighting. The gradient of
+# Eq. 9 is the field's screen-space derivative: exact for the interpolated field, which is
+# linear across each triangle. The uniforms (``sg*``) are declared by VTK from the shader
+# property's custom uniforms.
+
+CONTOUR_VS_DEC_SCALAR = """//VTK::Normal::Dec
+in float sgContourScalar;
+out float sgContourField;
+"""
+CONTOUR_VS_DEC_HEIGHT = """//VTK::Normal::Dec
+out float sgContourField;
+"""
+CONTOUR_VS_IMPL_SCALAR = """//VTK::Normal::Impl
+  sgContourField = sgContourScalar;
+"""
+CONTOUR_VS_IMPL_HEIGHT = """//VTK::Normal::Impl
+  {
+    // world height from the clip position: VTK's model matrix and coordinate shift are in it
+    vec4 sgClip = MCDCMatrix * vertexMC;
+    sgContourField = dot(sgHeightNum, sgClip) / dot(sgHeightDen, sgClip);
+  }
+"""
+
+CONTOUR_FS_DEC = """//VTK::Normal::Dec
+in float sgContourField;
+
+// f1 at t px from a line's centre: cap P(clip(a - b t, 0, 1)), P(v) = v (p1 + v (p2 + v p3))
+float sgLine(float t, float a, float cap)
+{
+  float v = clamp(a - t * sgLineB, 0.0, 1.0);
+  return cap * v * (sgP1 + v * (sgP2 + v * sgP3));
+}
+
+// Eq. 13-14: ink of the nearest level of base + n q and of the one beyond it, from the
+// on-screen spacing s = q / g of the family (px); iq = 1 / q
+float sgFamily(float x, float s, float iq, float a, float cap)
+{
+  float r = (x - sgBase) * iq;
+  float frac = abs(r - floor(r + 0.5));
+  return min(sgLine(frac * s, a, cap) + sgLine((1.0 - frac) * s, a, cap), 1.0);
+}
+
+// Eq. 11: fade to c_sparse where the field is flat (g < g_eps)
+float sgFlat(float c, float g)
+{
+  float ws = min(g * sgInvGeps, 1.0);
+  return ws * c + (1.0 - ws) * sgCSparse;
+}
+"""
+
+CONTOUR_FS_IMPL = """//VTK::Light::Impl
+  {
+    // Eq. 9: the field's gradient in field units per pixel, in uniform control flow
+    float sgX = sgContourField;
+    float sgG = length(vec2(dFdx(sgX), dFdy(sgX)));
+    float sgIG = 1.0 / max(sgG, 1e-30);  // spacing q / g = q * sgIG, finite where g = 0
+    float sgS = min(sgQ * sgIG, 1e30);
+    float sgSM = min(sgMajorQ * sgIG, 1e30);
+    // the distance (px) to the nearest minor and major level: a fragment beyond both lines'
+    // reach (most of them) has no line ink, and with c_sparse = c_dense = 0 (the defaults
+    // with majors) no ink at all: nothing more is evaluated there
+    float sgR = (sgX - sgBase) * sgInvQ;
+    bool sgNear = abs(sgR - floor(sgR + 0.5)) * sgS < sgLineA / sgLineB;
+    if (sgMajorQ > 0.0)
+    {
+      float sgRM = (sgX - sgBase) * sgInvMajorQ;
+      sgNear = sgNear || abs(sgRM - floor(sgRM + 0.5)) * sgSM < sgMajorA / sgLineB;
+    }
+    if (sgNear || sgCSparse > 0.0 || sgCDense > 0.0)
+    {
+      float sgV = sgNear ? sgFamily(sgX, sgS, sgInvQ, sgLineA, sgLineCap) : 0.0;
+      sgV = sgFlat(sgV, sgG);
+      // Eq. 15: where minor lines crowd closer than dense_at px, fade them to c_dense
+      float sgW = clamp((sgS - sgDenseAt) * sgInvD + 1.0, 0.0, 1.0);
+      sgV = sgW * sgV + (1.0 - sgW) * sgCDense;
+      if (sgMajorQ > 0.0)  // majors never thin out
+      {
+        float sgVM = sgNear ? sgFamily(sgX, sgSM, sgInvMajorQ, sgMajorA, sgMajorCap) : 0.0;
+        sgV = max(sgV, sgFlat(sgVM, sgG));
+      }
+      sgV = clamp(sgV, 0.0, 1.0) * sgOpacity;
+      gl_FragData[0].rgb = mix(gl_FragData[0].rgb, sgColor, sgV);
+    }
+  }
+"""
