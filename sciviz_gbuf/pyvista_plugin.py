@@ -451,16 +451,8 @@ class GBufPlotterComponent:
             The plotter, so calls chain.
         """
         keys = list(self._live) if all_subplots else [id(self._plotter.renderer)]
-        removed = False
         # newest first, so each one gives its layer back (layers are a stack)
-        for key in reversed(keys):
-            live = self._live.pop(key, None)
-            if live is not None:
-                live.detach()
-                removed = True
-        if removed:
-            self._rerender()
-        return self._plotter
+        return self._detach(self._live, reversed(keys))
 
     @property
     def edge_enhancement_enabled(self) -> bool:
@@ -564,9 +556,14 @@ class GBufPlotterComponent:
             The plotter, so calls chain.
         """
         keys = list(self._contours) if actor is None else [getattr(actor, "__this__", None)]
+        return self._detach(self._contours, keys)
+
+    def _detach(self, store: dict, keys: Any) -> Any:
+        """Detach and forget the overlays of ``store`` under ``keys`` (in that order); render
+        once more if any was there."""
         removed = False
         for key in keys:
-            live = self._contours.pop(key, None)
+            live = store.pop(key, None)
             if live is not None:
                 live.detach()
                 removed = True
