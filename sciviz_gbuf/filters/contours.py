@@ -434,6 +434,19 @@ def contour_line_parameters(
     return {name: float(prm32[i]) for name, i in _NAMED_SLOTS.items()}
 
 
+_F32_MAX = float(np.finfo(np.float32).max)
+
+
+def _f32(value: float, name: str) -> float:
+    """``value`` if float32 holds it: the kernels and shaders compare heights in float32, where
+    a larger base or interval would become inf and draw nothing without a word."""
+    if abs(value) > _F32_MAX:
+        raise InputError(
+            f"{name}: expected a magnitude below {_F32_MAX:.3g} (float32), got {value:g}"
+        )
+    return value
+
+
 def _contour_params(
     interval, levels, base, width, profile, g_eps, c_sparse, c_dense, dense_spacing,
     major_interval, major_width,
@@ -441,7 +454,7 @@ def _contour_params(
     """The checked parameters of :func:`contour_lines`: the kernel's code and ``prm``."""
     prm = _params(width, profile)
     d = 1 / prm[_p.INV_D]
-    prm[_p.BASE] = _validate.finite(base, "base")
+    prm[_p.BASE] = _f32(_validate.finite(base, "base"), "base")
     prm[_p.C_SPARSE] = _unit(c_sparse, "c_sparse")
     if major_interval is not None and interval is None:
         raise InputError("major_interval: needs interval= (regular minor levels)")
@@ -459,11 +472,13 @@ def _contour_params(
         raise InputError("dense_spacing: only used with c_dense= (or major_interval=)")
 
     if interval is not None:
-        q = _validate.positive(interval, "interval")
+        q = _f32(_validate.positive(interval, "interval"), "interval")
         prm[_p.Q] = q
         gap = q
         if major_interval is not None:
-            prm[_p.MAJOR_Q] = _validate.positive(major_interval, "major_interval")
+            prm[_p.MAJOR_Q] = _f32(
+                _validate.positive(major_interval, "major_interval"), "major_interval"
+            )
             mw = (
                 2 * d
                 if major_width is None

@@ -75,6 +75,10 @@ OTHER_FILTERS = {
         lambda gb, **kw: F.contour_polylines(FIELD, **({"interval": 1.0} | kw)),
         None,
     ),
+    "contour_line_parameters": (
+        lambda gb, **kw: F.contour_line_parameters(**({"interval": 1.0} | kw)),
+        None,
+    ),
     "fill_nodata_ring": (lambda gb, **kw: F.fill_nodata_ring(FIELD, **kw), (N, N)),
     "modulated_hatching": (
         lambda gb, **kw: F.modulated_hatching(FIELD, np.full(FIELD.shape, 0.7), **kw),
