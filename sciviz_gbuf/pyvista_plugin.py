@@ -87,6 +87,7 @@ class GBufAccessor:
         supersample: int = 1,
         feature_angle: float = 30.0,
         progress_bar: bool = False,
+        up: str | None = None,
     ) -> pv.ImageData:
         """Capture the dataset's G-buffer (:func:`sciviz_gbuf.capture`) as an ImageData.
 
@@ -94,6 +95,11 @@ class GBufAccessor:
         ----------
         window_size, camera, parallel_projection, scalars, supersample, feature_angle
             As in :func:`sciviz_gbuf.capture`.
+        up : {"x", "y", "z"}, optional
+            The upright world axis of the named views (``--up`` of the CLI). Default: the
+            convention of the file :func:`sciviz_gbuf.readers.read_mesh` read the dataset from (y for
+            OFF/OBJ/PLY/glTF), else z. ``pyvista.read`` does not record the file: give
+            ``up="y"`` for a y-up model read that way, or read it with ``read_mesh``.
         progress_bar : bool, default: False
             Show a progress bar.
 
@@ -115,6 +121,7 @@ class GBufAccessor:
             supersample=supersample,
             feature_angle=feature_angle,
             progress_bar=progress_bar,
+            up=up,
         )
         return gb.to_pyvista()
 
@@ -142,13 +149,18 @@ class GBufAccessor:
         width: float = 1.0,
         window_size: Sequence[int] | None = None,
         camera: object = None,
-        supersample: int = 1,
+        parallel_projection: bool | None = None,
+        supersample: int | None = None,
+        up: str | None = None,
         progress_bar: bool = False,
     ) -> pv.ImageData:
-        """An edge-enhanced picture of the dataset (:func:`~sciviz_gbuf.recipes.illustrate`).
+        """An edge-enhanced picture of the dataset (:func:`~sciviz_gbuf.recipes.illustrate`):
+        the picture ``sciviz-gbuf edges FILE -o out.png`` draws of the same file with the same
+        options (same size, view, supersampling, up axis).
 
         On an image made by :meth:`capture` the stored G-buffer is used (no new render;
-        ``window_size``, ``camera`` and ``supersample`` must then be left unset).
+        ``window_size``, ``camera``, ``parallel_projection``, ``up`` and ``supersample`` must
+        then be left unset).
 
         Parameters
         ----------
@@ -158,8 +170,13 @@ class GBufAccessor:
             Fig. 7); ``edgemap``: the RGBA edge map itself.
         operator, crease_angle, depth_jump, width
             As in :func:`sciviz_gbuf.filters.edge_map`.
-        window_size, camera, supersample
-            As in :func:`sciviz_gbuf.capture`.
+        window_size, camera, parallel_projection
+            As in :func:`sciviz_gbuf.capture` (default ``(1024, 768)``, the ``iso`` view).
+        supersample : int, optional
+            Render at this many times the size and average down (antialiasing); default 2,
+            as the CLI.
+        up : {"x", "y", "z"}, optional
+            The upright world axis, as in :meth:`capture`.
         progress_bar : bool, default: False
             Show a progress bar while capturing.
 
@@ -172,10 +189,17 @@ class GBufAccessor:
         """
         style = check_style(style, "illustrate")
         if _is_gbuffer_image(self._dataset):
-            if window_size is not None or camera is not None or supersample != 1:
+            given = {
+                "window_size": window_size is not None,
+                "camera": camera is not None,
+                "parallel_projection": parallel_projection is not None,
+                "up": up is not None,
+                "supersample": supersample is not None,
+            }
+            if any(given.values()):
+                names = "/".join(k for k, v in given.items() if v)
                 raise InputError(
-                    "window_size/camera/supersample: this is a captured G-buffer image; "
-                    "its view is fixed"
+                    f"{names}: this is a captured G-buffer image; its view and size are fixed"
                 )
             gb = self.gbuffer()
         else:
@@ -183,8 +207,10 @@ class GBufAccessor:
                 self._dataset,
                 window_size=window_size,
                 camera=camera,
-                supersample=supersample,
+                parallel_projection=parallel_projection,
+                supersample=2 if supersample is None else supersample,
                 progress_bar=progress_bar,
+                up=up,
             )
         picture = illustrate(
             gb,
