@@ -97,8 +97,8 @@ class GBufAccessor:
             As in :func:`sciviz_gbuf.capture`.
         up : {"x", "y", "z"}, optional
             The upright world axis of the named views (``--up`` of the CLI). Default: the
-            convention of the file :func:`sciviz_gbuf.readers.read_mesh` read the dataset from (y for
-            OFF/OBJ/PLY/glTF), else z. ``pyvista.read`` does not record the file: give
+            convention of the file :func:`sciviz_gbuf.readers.read_mesh` read the dataset
+            from (y for OFF/OBJ/PLY/glTF), else z. ``pyvista.read`` does not record the file: give
             ``up="y"`` for a y-up model read that way, or read it with ``read_mesh``.
         progress_bar : bool, default: False
             Show a progress bar.

@@ -803,6 +803,10 @@ def _warm() -> None:
         run_steps(iter([_edge_lines_first, *figures]))
 
 
+#: Smallest ``window_size`` of the demo: below it the figures' panels and labels are specks.
+MIN_WINDOW = (160, 120)
+
+
 def run_demo(
     outdir: str | Path = "sciviz_gbuf_demo",
     *,
@@ -816,9 +820,11 @@ def run_demo(
     Parameters
     ----------
     outdir : str or path-like, default: "sciviz_gbuf_demo"
-        Directory to write into (created if missing); nothing is written elsewhere.
+        Directory to write into (created if missing, and removed again if the run stops
+        before its first file); nothing is written elsewhere.
     window_size : (int, int), default: (800, 600)
-        ``(width, height)`` of the captures, of each channel image and of the edge figures. The
+        ``(width, height)`` of the captures, of each channel image and of the edge figures, at
+        least :data:`MIN_WINDOW` (160x120). The
         contour figures are square, ``min(width, height, 800)`` pixels across (at least 16).
     progress_bar : bool, default: False
         Show a progress bar for each capture.
@@ -839,13 +845,36 @@ def run_demo(
         (``fig<n>_<key>.png``, ``fig<n>_montage.png``); finally ``index.html``.
     """
     width, height = check_window_size(window_size)
+    if width < MIN_WINDOW[0] or height < MIN_WINDOW[1]:
+        raise InputError(
+            f"window_size: the demo's figures need at least {MIN_WINDOW[0]}x{MIN_WINDOW[1]} "
+            f"pixels, got {width}x{height}"
+        )
     out = Path(outdir)
     if out.exists() and not out.is_dir():
         raise InputError(f"output: {str(out)!r} is a file; expected a folder (new or existing)")
+    made = not out.exists()
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise OutputError(f"output: cannot make the folder {str(out)!r}: {exc.strerror}") from None
+    try:
+        return _run_steps(out, width, height, progress_bar, report)
+    except BaseException:
+        # stopped (Ctrl-C, SIGTERM, an error) before its first file: leave no empty folder
+        if made and out.is_dir() and not any(out.iterdir()):
+            out.rmdir()
+        raise
+
+
+def _run_steps(
+    out: Path,
+    width: int,
+    height: int,
+    progress_bar: bool,
+    report: Callable[[str], None] | None,
+) -> list[Path]:
+    """:func:`run_demo`'s work in the folder ``out`` (made)."""
     say = report if report is not None else (lambda _line: None)
     second = None
     if numba_cache_is_cold():
@@ -854,9 +883,9 @@ def run_demo(
             "cores) and are cached for later runs (those take a fraction of the time)"
         )
         second = start_warmup(["sciviz_gbuf.apps.demo", "--warmup"])
-    steps = _steps(width, height)
-    t_all = time.perf_counter()
     try:
+        steps = _steps(width, height)
+        t_all = time.perf_counter()
         for k, (title, write, item) in enumerate(steps, 1):
             t0 = time.perf_counter()
             say(f"[{k}/{len(steps)}] {title} ...")

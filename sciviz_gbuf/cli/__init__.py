@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import re
 import sys
 import warnings
 from collections.abc import Sequence
@@ -72,6 +73,34 @@ def _announce(argv: Sequence[str]) -> None:
               file=sys.stderr, flush=True)  # fmt: skip
 
 
+# A value that starts with a minus sign and a digit ("-5x10", "-20,100", "-.5"): argparse takes
+# anything starting with "-" that is not a plain negative number for an option.
+_NEGATIVE_VALUE = re.compile(r"-[0-9.]")
+
+
+def _attach_negative_values(argv: list[str]) -> list[str]:
+    """``--opt -5x10`` as ``--opt=-5x10``, so that a negative-looking value reaches the
+    option's own check (one line naming it and what is expected) instead of argparse's
+    "expected one argument"."""
+    out: list[str] = []
+    i = 0
+    while i < len(argv):
+        token = argv[i]
+        if (
+            token.startswith("--")
+            and "=" not in token
+            and token != "--"
+            and i + 1 < len(argv)
+            and _NEGATIVE_VALUE.match(argv[i + 1])
+        ):
+            out.append(f"{token}={argv[i + 1]}")
+            i += 2
+            continue
+        out.append(token)
+        i += 1
+    return out
+
+
 def _drop_warning(*args: object, **kwargs: object) -> None:
     """``warnings.showwarning`` after a failure: late warnings are not printed."""
 
@@ -83,7 +112,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     given = sys.argv[1:] if argv is None else list(argv)
     _announce(given)
     known = {function.removeprefix("add_") for _, function in COMMANDS}
-    args = build_parser(given[0] if given and given[0] in known else None).parse_args(argv)
+    parser = build_parser(given[0] if given and given[0] in known else None)
+    args = parser.parse_args(_attach_negative_values(given))
     # SIGTERM and SIGINT become an exception, so that the writers' clean-up runs: the output
     # being written is removed and the process exits 2 with one line, not by the signal. The
     # outputs of one command are renamed to their names together at its end: a command that

@@ -28,11 +28,13 @@ from ._mesh_check import (
 )
 from .formats import kind_of
 
-__all__ = ["SOURCE_ARRAY", "check_mesh", "quiet_vtk", "read_mesh", "source_name"]
+__all__ = ["IMAGE_SUFFIXES", "SOURCE_ARRAY", "check_mesh", "quiet_vtk", "read_mesh", "source_name"]
 
 #: Field-data array in which :func:`read_mesh` records the path it read (as the user gave it),
 #: so that later errors (in the capture, say) name the file rather than "dataset 0".
 SOURCE_ARRAY = "__sciviz_gbuf_source"
+#: Picture formats VTK reads as a flat image grid: never a mesh to draw.
+IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".gif", ".webp", ".pnm", ".ppm", ".pgm")
 
 
 def quiet_vtk() -> AbstractContextManager[VTKMessages]:
@@ -90,8 +92,24 @@ def read_mesh(path: str | os.PathLike) -> pv.DataSet:
     """
     shown = os.fsdecode(path)
     p = Path(path)
+    if p.is_dir():
+        raise InputError(
+            f"{shown}: is a folder, not a mesh file (give the file inside it; "
+            f"`sciviz-gbuf ct {shown}` reads a DICOM series)"
+        )
     if not p.is_file():
         raise InputError(f"{shown}: no such mesh file")
+    if p.suffix.lower() in IMAGE_SUFFIXES:
+        # VTK reads a picture as a flat grid: a capture would draw one grey quad
+        raise InputError(
+            f"{shown}: is a {p.suffix.lower()[1:].upper()} image, not a mesh (expected STL, "
+            "PLY, OBJ, OFF, VTK/VTP/VTU, glTF, ...)"
+        )
+    if kind_of(p) == "dem":
+        raise InputError(
+            f"{shown}: is a DEM grid ({p.suffix.lower()}), not a mesh: `sciviz-gbuf topo` "
+            f"and `birdseye` draw it (in Python: read_dem and DEM.to_pyvista)"
+        )
     if kind_of(p) == "volume":
         # VTK would read it as an image whose outer box is all a capture draws
         raise InputError(

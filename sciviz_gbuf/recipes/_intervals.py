@@ -8,7 +8,10 @@ import warnings
 
 import numpy as np
 
+from ..errors import InputError
+
 __all__ = [
+    "MIN_MAJOR_SPACING",
     "choose_intervals",
     "contour_intervals",
     "median_ground_slope",
@@ -94,18 +97,49 @@ def contour_intervals(
     major_interval: float | None,
     *,
     pixels_per_sample: float = 1.0,
+    check_spacing: bool = False,
 ) -> tuple[float, float, float, float | None]:
     """``(lo, hi, interval, major_interval)`` of a height image: its valid range (0, 1 if
     none) and the contour intervals, the given ones or :func:`nice_intervals` on its slope;
     ``major_interval`` alone implies minors at a fifth of it. ``pixels_per_sample``: output
-    pixels per sample of ``z`` (1 / supersampling), for the slope in output pixels."""
+    pixels per sample of ``z`` (1 / supersampling), for the slope in output pixels.
+
+    ``check_spacing``: given intervals whose major lines (the minors without majors) would be
+    closer than :data:`MIN_MAJOR_SPACING` pixels on the median slope raise an InputError
+    naming the useful range: such lines never thin out (Eq. 15 fades minors only) and would
+    ink the whole map."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN: no range
         lo, hi = float(np.nanmin(z)), float(np.nanmax(z))
     slope = None
-    if interval is None and major_interval is None:
+    given = not (interval is None and major_interval is None)
+    if not given or check_spacing:
         slope = typical_slope(z) / pixels_per_sample
-    return choose_intervals(lo, hi, slope, interval, major_interval)
+    out = choose_intervals(lo, hi, None if given else slope, interval, major_interval)
+    if given and check_spacing and slope is not None and math.isfinite(slope) and slope > 0:
+        _check_spacing(out[2], out[3], slope, lo, hi)
+    return out
+
+
+#: Closest spacing (output pixels on the median slope) of the lines that never thin out: a
+#: 2 px major line and a 2 px gap.
+MIN_MAJOR_SPACING = 4.0
+
+
+def _check_spacing(
+    interval: float, major_interval: float | None, slope: float, lo: float, hi: float
+) -> None:
+    name, q = ("major_interval", major_interval) if major_interval else ("interval", interval)
+    spacing = float(q) / slope
+    if spacing >= MIN_MAJOR_SPACING:
+        return
+    _, suggested = nice_intervals(lo, hi, slope=slope)
+    least = round_up(slope * MIN_MAJOR_SPACING)
+    raise InputError(
+        f"{name}: lines every {float(q):g} are {spacing:.2g} px apart on the median slope "
+        f"({slope:.3g} a pixel), so they would ink the whole map; expected at least "
+        f"{least:g} (the automatic choice here: major {suggested:g}, minor {suggested / 5:g})"
+    )
 
 
 def choose_intervals(

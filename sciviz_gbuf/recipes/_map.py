@@ -193,7 +193,9 @@ def map_layers(
     z = heights
     style = relief_style(relief)
     relief = style is not None
-    lo, hi, interval, major_interval = contour_intervals(z, interval, major_interval)
+    lo, hi, interval, major_interval = contour_intervals(
+        z, interval, major_interval, check_spacing=bool(contours)
+    )
     layers: dict[str, object] = {"ink": None, "relief": relief}
     layers["tables"] = map_band_tables(
         bands, interval, major_interval, cmap, lo if vmin is None else vmin,
