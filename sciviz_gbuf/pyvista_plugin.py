@@ -514,9 +514,9 @@ class GBufPlotterComponent:
         Saito & Takahashi's image-space contour lines (1990 Eq. 7-15), as
         :func:`sciviz_gbuf.filters.contour_lines` draws them, evaluated per fragment while
         the actor is drawn: one pass, no capture and no read-back (on a 2-core Mesa llvmpipe
-        machine 0.86-0.91x the plain frame rate). A bird's-eye topographic map you can orbit:
+        machine 0.91-0.96x the plain frame rate). A bird's-eye topographic map you can orbit:
         ``pl.gbuf.enable_contour_lines(actor, interval=20, major_interval=100)``. Calling it
-        again for the same actor changes the parameters (nothing is compiled).
+        again for the same actor changes the parameters (new values compile nothing).
 
         Parameters
         ----------

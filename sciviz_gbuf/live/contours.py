@@ -8,7 +8,9 @@ of the actor's data (mapped to a vertex attribute) or the world height along an 
 (unprojected from the vertex's clip position with the camera's inverse, so VTK's coordinate
 shift for far-from-origin data, a UTM DEM, does not enter); Eq. 9's gradient is the field's
 screen-space derivative. Every parameter is a custom uniform of the actor's shader property:
-changing one compiles nothing, and disabling removes exactly what was added.
+changing a value compiles nothing (the program holds the parts of Eq. 7-15 in use, see
+:func:`.glsl.contour_fs_impl`: turning one on or off swaps to that program, compiled once),
+and disabling removes exactly what was added.
 
 The CPU route's lines (``capture`` the field as a G-buffer scalar, ``contour_lines`` of it)
 are the reference: the two agree to within a pixel (tested). What the shader cannot do is look
@@ -31,7 +33,7 @@ from ..errors import InputError
 from ..filters.contours import contour_line_parameters
 from . import glsl
 
-__all__ = ["AXES", "ContourField", "LiveContours", "contour_options"]
+__all__ = ["AXES", "ContourField", "LiveContours", "contour_options", "shader_features"]
 
 #: World axes a height field can follow (``height="z"``, or any 3-vector).
 AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
@@ -141,11 +143,43 @@ def contour_options(
     floats["sgInvQ"] = float(np.float32(1.0) / np.float32(values["q"]))
     mq = np.float32(values["major_q"])
     floats["sgInvMajorQ"] = float(np.float32(1.0) / mq) if mq > 0 else 0.0
+    # products of uniforms the shader would otherwise form per fragment (glsl.contour_fs_impl)
+    f32 = np.float32
+    floats["sgQB"] = float(f32(values["q"]) * f32(values["line_b"]))
+    floats["sgMajorQB"] = float(mq * f32(values["line_b"]))
+    floats["sgDenseK1"] = float(f32(values["q"]) * f32(values["inv_d"]))
+    floats["sgDenseK0"] = float(f32(1.0) - f32(values["dense_at"]) * f32(values["inv_d"]))
     return {
         "floats": floats,
         "color": rgb,
         "opacity": _validate.number_in(opacity, "opacity", 0.0, 1.0),
+        "features": shader_features(values),
     }
+
+
+def shader_features(values: dict[str, float]) -> frozenset[str]:
+    """The parts of the fragment shader (:func:`.glsl.contour_fs_impl`) that the parameters
+    of :func:`~sciviz_gbuf.filters.contour_line_parameters` use."""
+    f = set()
+    if values["major_q"] > 0:
+        f.add("major")
+    if (values["p1"], values["p2"], values["p3"]) != (1.0, 0.0, 0.0):
+        f.add("poly")
+    if values["line_cap"] != 1.0 or (values["major_q"] > 0 and values["major_cap"] != 1.0):
+        f.add("cap")
+    if values["c_sparse"] > 0:
+        f.add("sparse")
+    if values["dense_at"] > -1e29:
+        f.add("dense")
+        if values["c_dense"] > 0:
+            f.add("cdense")
+    if "dense" not in f:
+        # Eq. 13-14's second term, the level beyond the nearest, adds ink only where two lines
+        # are closer than their widths: with dense fading the minors have faded there (at
+        # dense_at, twice the width by default) and the majors merge into solid ink either
+        # way, so the shader leaves it out (12 operations a fragment)
+        f.add("beyond")
+    return frozenset(f)
 
 
 def _renderer_of(plotter: Any, actor: Any) -> Any:
@@ -197,7 +231,7 @@ class LiveContours:
         sp.AddVertexShaderReplacement("//VTK::Normal::Dec", True, vs_dec, False)
         sp.AddVertexShaderReplacement("//VTK::Normal::Impl", True, vs_impl, False)
         sp.AddFragmentShaderReplacement("//VTK::Normal::Dec", True, glsl.CONTOUR_FS_DEC, False)
-        sp.AddFragmentShaderReplacement("//VTK::Light::Impl", True, glsl.CONTOUR_FS_IMPL, False)
+        self._set_program(self.options["features"])
         self._set_uniforms()
         if not scalar:
             self._set_height_plane()
@@ -207,9 +241,19 @@ class LiveContours:
         self._attached = True
 
     def set_options(self, options: dict) -> None:
-        """New line parameters: uniforms only, nothing is compiled."""
+        """New line parameters: uniforms only, unless they turn a part of the shader on or off
+        (majors, a non-linear profile, c_sparse/c_dense > 0, dense-line fading): then that
+        program, compiled once and kept by VTK's shader cache."""
+        if options["features"] != self.options["features"]:
+            self._set_program(options["features"])
         self.options = options
         self._set_uniforms()
+
+    def _set_program(self, features: frozenset[str]) -> None:
+        sp = self._actor.GetShaderProperty()
+        sp.ClearFragmentShaderReplacement("//VTK::Light::Impl", True)
+        impl = glsl.contour_fs_impl(features)
+        sp.AddFragmentShaderReplacement("//VTK::Light::Impl", True, impl, False)
 
     def detach(self) -> None:
         """Remove everything :meth:`attach` added: the actor draws exactly as before."""

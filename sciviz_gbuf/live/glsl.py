@@ -31,14 +31,15 @@ from __future__ import annotations
 
 __all__ = [
     "COMPOSITE_FS",
+    "CONTOUR_FEATURES",
     "CONTOUR_FS_DEC",
-    "CONTOUR_FS_IMPL",
     "CONTOUR_VS_DEC_HEIGHT",
     "CONTOUR_VS_DEC_SCALAR",
     "CONTOUR_VS_IMPL_HEIGHT",
     "CONTOUR_VS_IMPL_SCALAR",
     "EDGE_FS",
     "GBUFFER_FS",
+    "contour_fs_impl",
     "gbuffer_fs",
 ]
 
@@ -316,63 +317,90 @@ CONTOUR_VS_IMPL_HEIGHT = """//VTK::Normal::Impl
 
 CONTOUR_FS_DEC = """//VTK::Normal::Dec
 in float sgContourField;
-
-// f1 at t px from a line's centre: cap P(clip(a - b t, 0, 1)), P(v) = v (p1 + v (p2 + v p3))
-float sgLine(float t, float a, float cap)
-{
-  float v = clamp(a - t * sgLineB, 0.0, 1.0);
-  return cap * v * (sgP1 + v * (sgP2 + v * sgP3));
-}
-
-// Eq. 13-14: ink of the nearest level of base + n q and of the one beyond it, from the
-// on-screen spacing s = q / g of the family (px); iq = 1 / q
-float sgFamily(float x, float s, float iq, float a, float cap)
-{
-  float r = (x - sgBase) * iq;
-  float frac = abs(r - floor(r + 0.5));
-  return min(sgLine(frac * s, a, cap) + sgLine((1.0 - frac) * s, a, cap), 1.0);
-}
-
-// Eq. 11: fade to c_sparse where the field is flat (g < g_eps)
-float sgFlat(float c, float g)
-{
-  float ws = min(g * sgInvGeps, 1.0);
-  return ws * c + (1.0 - ws) * sgCSparse;
-}
 """
 
-CONTOUR_FS_IMPL = """//VTK::Light::Impl
-  {
-    // Eq. 9: the field's gradient in field units per pixel, in uniform control flow
-    float sgX = sgContourField;
-    float sgG = length(vec2(dFdx(sgX), dFdy(sgX)));
-    float sgIG = 1.0 / max(sgG, 1e-30);  // spacing q / g = q * sgIG, finite where g = 0
-    float sgS = min(sgQ * sgIG, 1e30);
-    float sgSM = min(sgMajorQ * sgIG, 1e30);
-    // the distance (px) to the nearest minor and major level: a fragment beyond both lines'
-    // reach (most of them) has no line ink, and with c_sparse = c_dense = 0 (the defaults
-    // with majors) no ink at all: nothing more is evaluated there
-    float sgR = (sgX - sgBase) * sgInvQ;
-    bool sgNear = abs(sgR - floor(sgR + 0.5)) * sgS < sgLineA / sgLineB;
-    if (sgMajorQ > 0.0)
-    {
-      float sgRM = (sgX - sgBase) * sgInvMajorQ;
-      sgNear = sgNear || abs(sgRM - floor(sgRM + 0.5)) * sgSM < sgMajorA / sgLineB;
-    }
-    if (sgNear || sgCSparse > 0.0 || sgCDense > 0.0)
-    {
-      float sgV = sgNear ? sgFamily(sgX, sgS, sgInvQ, sgLineA, sgLineCap) : 0.0;
-      sgV = sgFlat(sgV, sgG);
-      // Eq. 15: where minor lines crowd closer than dense_at px, fade them to c_dense
-      float sgW = clamp((sgS - sgDenseAt) * sgInvD + 1.0, 0.0, 1.0);
-      sgV = sgW * sgV + (1.0 - sgW) * sgCDense;
-      if (sgMajorQ > 0.0)  // majors never thin out
-      {
-        float sgVM = sgNear ? sgFamily(sgX, sgSM, sgInvMajorQ, sgMajorA, sgMajorCap) : 0.0;
-        sgV = max(sgV, sgFlat(sgVM, sgG));
-      }
-      sgV = clamp(sgV, 0.0, 1.0) * sgOpacity;
-      gl_FragData[0].rgb = mix(gl_FragData[0].rgb, sgColor, sgV);
-    }
-  }
-"""
+#: What a set of line parameters needs of the fragment shader (:func:`contour_fs_impl`).
+CONTOUR_FEATURES = ("major", "poly", "cap", "sparse", "dense", "cdense", "beyond")
+
+
+def contour_fs_impl(features: frozenset[str] | set[str]) -> str:
+    """The fragment replacement drawing the lines with the parts of Eq. 7-15 the parameters
+    use, after VTK's lighting (``//VTK::Light::Impl``).
+
+    llvmpipe runs both sides of every branch (masked SIMD) and each operation costs about
+    0.2 % of a plain frame there, so the program holds only the parts in use and takes the
+    products of uniforms ready-made: ``major`` (a major family, ``major_q > 0``), ``poly``
+    (a profile other than ``linear``: ``P(v) = v (p1 + v (p2 + v p3))``, else ``P(v) = v``),
+    ``cap`` (a line narrower than a pixel: its peak ``cap < 1``), ``sparse`` (``c_sparse >
+    0``: the flat fade of Eq. 11 goes to it, else to 0), ``dense`` (the dense-line fade of
+    Eq. 15), ``cdense`` (``c_dense > 0``), ``beyond`` (Eq. 13-14's second term, the ink of
+    the level beyond the nearest). Each set of parts is one program (compiled once, kept by
+    VTK's shader cache); within one, every value is a uniform.
+
+    The uniforms: ``sgQB = q b`` (per family, so ``t b = frac q b / g`` with ``t`` the
+    distance in px to the level and ``b`` the profile's slope), ``sgDenseK1 = q / d``,
+    ``sgDenseK0 = 1 - dense_at / d`` (Eq. 15's ramp ``clip((q / g - dense_at) / d + 1)``)
+    and those of :func:`~sciviz_gbuf.filters.contour_line_parameters` (``sgLineA``, ...).
+    """
+    unknown = set(features) - set(CONTOUR_FEATURES)
+    if unknown:
+        raise ValueError(f"unknown contour shader features: {sorted(unknown)}")
+    f = set(features)
+    two = "major" in f
+    dims = "vec2" if two else "float"
+
+    def pick(a: str, b: str) -> str:
+        return f"vec2({a}, {b})" if two else a
+
+    lines = [
+        "//VTK::Light::Impl",
+        "  {",
+        "    // Eq. 9: the field's gradient g in field units per pixel, 1 / g at most 1e18",
+        "    float sgX = sgContourField;",
+        "    vec2 sgD = vec2(dFdx(sgX), dFdy(sgX));",
+        "    float sgGG = dot(sgD, sgD);",
+        "    float sgIG = inversesqrt(max(sgGG, 1e-36));",
+        "    // the fraction of a spacing to the nearest level of each family",
+        f"    {dims} sgR = (sgX - sgBase) * {pick('sgInvQ', 'sgInvMajorQ')};",
+        f"    {dims} sgF = abs(sgR - floor(sgR + 0.5));",
+        "    // f1 at t = frac q / g px from the line's centre: cap P(clip(a - b t, 0, 1))",
+        f"    {dims} sgA = {pick('sgLineA', 'sgMajorA')};",
+        f"    {dims} sgK = {pick('sgQB', 'sgMajorQB')} * sgIG;  // b px per unit fraction",
+        f"    {dims} sgV = clamp(sgA - sgF * sgK, 0.0, 1.0);",
+    ]
+    if "beyond" in f:
+        lines.append(f"    {dims} sgV2 = clamp(sgA - (1.0 - sgF) * sgK, 0.0, 1.0);")
+    if "poly" in f:
+        lines.append("    sgV = sgV * (sgP1 + sgV * (sgP2 + sgV * sgP3));")
+        if "beyond" in f:
+            lines.append("    sgV2 = sgV2 * (sgP1 + sgV2 * (sgP2 + sgV2 * sgP3));")
+    if "cap" in f:
+        cap = pick("sgLineCap", "sgMajorCap")
+        lines.append(f"    sgV = {'min(sgV + sgV2, 1.0 / ' + cap + ')' if 'beyond' in f else 'sgV'}"
+                     f" * {cap};")  # fmt: skip
+    elif "beyond" in f:
+        lines.append("    sgV = min(sgV + sgV2, 1.0);")
+    lines.append("    // Eq. 11: fade to c_sparse where the field is flat (g < g_eps)")
+    lines.append("    float sgWs = min(sgGG * sgIG * sgInvGeps, 1.0);")
+    if "sparse" in f:
+        lines.append("    sgV = sgWs * sgV + (1.0 - sgWs) * sgCSparse;")
+    else:
+        lines.append("    sgV *= sgWs;")
+    lines.append(f"    float sgInk = {'sgV.x' if two else 'sgV'};")
+    if "dense" in f:
+        lines.append("    // Eq. 15: minor lines closer than dense_at px fade to c_dense")
+        lines.append("    float sgW = clamp(sgIG * sgDenseK1 + sgDenseK0, 0.0, 1.0);")
+        if "cdense" in f:
+            lines.append("    sgInk = sgW * sgInk + (1.0 - sgW) * sgCDense;")
+        else:
+            lines.append("    sgInk *= sgW;")
+    if two:
+        lines.append("    sgInk = max(sgInk, sgV.y);  // majors never thin out")
+    if "poly" in f:
+        lines.append("    sgInk = clamp(sgInk, 0.0, 1.0);  // a profile may overshoot")
+    lines += [
+        "    gl_FragData[0].rgb = mix(gl_FragData[0].rgb, sgColor, sgInk * sgOpacity);",
+        "  }",
+        "",
+    ]
+    return "\n".join(lines)

@@ -226,3 +226,51 @@ def test_the_parameters_are_those_of_contour_lines():
     assert p["inv_geps"] == pytest.approx(50.0)  # g_eps = interval / 1000
     with pytest.raises(InputError, match="major_width"):
         contour_line_parameters(interval=20, major_width=3)
+
+
+# Line parameters turning on each part of the fragment shader (glsl.contour_fs_impl): majors,
+# a non-linear profile, a sub-pixel line (cap < 1), c_sparse, dense fading with c_dense > 0.
+VARIANTS = {
+    "minor only": {"interval": 0.05},
+    "majors": {"interval": 0.05, "major_interval": 0.25},
+    "smooth profile": {"interval": 0.05, "profile": "smooth", "width": 2.0},
+    "thin": {"interval": 0.05, "width": 0.6},
+    "c_sparse": {"interval": 0.05, "c_sparse": 0.2, "g_eps": 0.2},
+    "c_dense": {"interval": 0.05, "major_interval": 0.25, "c_dense": 0.3, "dense_spacing": 6},
+}
+
+
+def test_every_shader_variant_agrees_with_contour_lines_in_one_actor(hills):
+    """Each set of parameters draws what contour_lines draws; switching between them in one
+    actor swaps the program (VTK's cache keeps each) with no VTK error, and only a part
+    turned on or off swaps it."""
+    from sciviz_gbuf.live.contours import contour_options, shader_features
+
+    pl, actor = _scene(hills)
+    plain = pl.screenshot()
+    gb = sg.capture(pl, scalars=["Elevation"])
+    seen = set()
+    for name, opts in [*VARIANTS.items(), ("minor only again", VARIANTS["minor only"])]:
+        defaults = {
+            "major_interval": None, "base": 0.0, "width": 1.0, "major_width": None,
+            "profile": "linear", "c_dense": None, "dense_spacing": None, "g_eps": None,
+            "c_sparse": 0.0, "color": (0, 0, 0), "opacity": 1.0,
+        }  # fmt: skip
+        seen.add(contour_options(**{**defaults, **opts})["features"])
+        with pv.VtkErrorCatcher(raise_errors=True, emit_warnings=True):
+            pl.gbuf.enable_contour_lines(actor, scalars="Elevation", **opts)
+            img = pl.screenshot()
+        cpu = contour_lines(gb.scalars["Elevation"], mask=gb.mask, **opts)
+        gpu = _ink(img, plain, gb.mask)
+        strong = cpu > 0.5
+        if strong.sum() > 1000:
+            near_cpu, near_gpu = _agree(gpu, cpu)
+            assert near_cpu >= 0.95 and near_gpu >= 0.95, (name, near_cpu, near_gpu)
+        # the ink itself, pixel by pixel (8-bit screenshots, faint sparse/dense fills)
+        assert np.abs(gpu - cpu)[gb.mask].mean() <= 0.03, name
+        assert abs(gpu.sum() - cpu.sum()) <= 0.06 * cpu.sum(), name
+    assert len(seen) == len(VARIANTS)  # each a program of its own
+    assert shader_features(contour_line_parameters(interval=1.0, width=3.0)) == frozenset(
+        {"beyond"}
+    )  # the default: the two nearest levels of one family, nothing else
+    pl.close()
