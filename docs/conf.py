@@ -38,6 +38,9 @@ extensions = [
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
 exclude_patterns = ["_build", "cli_usage.md", "**.ipynb_checkpoints", "auto_examples/*.ipynb"]
 myst_heading_anchors = 3
+# No "smart" typography: argparse's help and the docs' option names are code a reader copies
+# ("--up" would otherwise render as an en dash "–up", which a shell does not take).
+smartquotes = False
 myst_enable_extensions = ["colon_fence"]
 
 html_theme = "furo"

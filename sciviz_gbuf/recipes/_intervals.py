@@ -121,9 +121,10 @@ def contour_intervals(
     return out
 
 
-#: Closest spacing (output pixels on the median slope) of the lines that never thin out: a
-#: 2 px major line and a 2 px gap.
-MIN_MAJOR_SPACING = 4.0
+#: Closest spacing (output pixels on the median slope) of the lines that never thin out:
+#: closer than half a pixel they alias into solid ink or noise, whatever their width (a
+#: busy map of 1-2 px spacing on steep ground is still a map someone may want).
+MIN_MAJOR_SPACING = 0.5
 
 
 def _check_spacing(
@@ -137,7 +138,7 @@ def _check_spacing(
     least = round_up(slope * MIN_MAJOR_SPACING)
     raise InputError(
         f"{name}: lines every {float(q):g} are {spacing:.2g} px apart on the median slope "
-        f"({slope:.3g} a pixel), so they would ink the whole map; expected at least "
+        f"({slope:.3g} a pixel), so they would fill the map with ink; expected at least "
         f"{least:g} (the automatic choice here: major {suggested:g}, minor {suggested / 5:g})"
     )
 

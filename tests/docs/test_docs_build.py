@@ -3,7 +3,9 @@ and shows the pictures it wrote, and the CLI reference lists every command."""
 
 from __future__ import annotations
 
+import html
 import os
+import re
 import subprocess
 import sys
 
@@ -64,6 +66,16 @@ def test_cli_reference_lists_every_command_and_option(site):
         for action in parser._actions:
             for flag in action.option_strings:
                 assert flag in html, (name, flag)
+
+
+def test_cli_reference_shows_options_as_typed(site):
+    """Copied from the page, an option must work: ``--up``, not an en dash ``–up``."""
+    page = (site[0] / "cli.html").read_text()
+    text = html.unescape(re.sub(r"<[^>]+>", " ", page))
+    assert re.search(r"(?<![-\w])--up\b", text), "no --up in the visible text"
+    dashed = re.findall(r"[\u2013\u2014][a-z][\w-]*", text)
+    assert not dashed, dashed[:10]
+    assert "\u201c" not in text and "\u201d" not in text  # no curly quotes around values
 
 
 @pytest.mark.parametrize("script", EXAMPLES, ids=[p.stem for p in EXAMPLES])
