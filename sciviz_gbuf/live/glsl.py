@@ -323,6 +323,13 @@ in float sgContourField;
 CONTOUR_FEATURES = ("major", "poly", "cap", "sparse", "dense", "cdense", "beyond")
 
 
+def _fade(value: str, weight: str, target: str | None) -> str:
+    """``value`` faded by ``weight`` towards ``target`` (Eq. 11 and 15), or towards 0."""
+    if target is None:
+        return f"    {value} *= {weight};"
+    return f"    {value} = {weight} * {value} + (1.0 - {weight}) * {target};"
+
+
 def contour_fs_impl(features: frozenset[str] | set[str]) -> str:
     """The fragment replacement drawing the lines with the parts of Eq. 7-15 the parameters
     use, after VTK's lighting (``//VTK::Light::Impl``).
@@ -382,18 +389,12 @@ def contour_fs_impl(features: frozenset[str] | set[str]) -> str:
         lines.append("    sgV = min(sgV + sgV2, 1.0);")
     lines.append("    // Eq. 11: fade to c_sparse where the field is flat (g < g_eps)")
     lines.append("    float sgWs = min(sgGG * sgIG * sgInvGeps, 1.0);")
-    if "sparse" in f:
-        lines.append("    sgV = sgWs * sgV + (1.0 - sgWs) * sgCSparse;")
-    else:
-        lines.append("    sgV *= sgWs;")
+    lines.append(_fade("sgV", "sgWs", "sgCSparse" if "sparse" in f else None))
     lines.append(f"    float sgInk = {'sgV.x' if two else 'sgV'};")
     if "dense" in f:
         lines.append("    // Eq. 15: minor lines closer than dense_at px fade to c_dense")
         lines.append("    float sgW = clamp(sgIG * sgDenseK1 + sgDenseK0, 0.0, 1.0);")
-        if "cdense" in f:
-            lines.append("    sgInk = sgW * sgInk + (1.0 - sgW) * sgCDense;")
-        else:
-            lines.append("    sgInk *= sgW;")
+        lines.append(_fade("sgInk", "sgW", "sgCDense" if "cdense" in f else None))
     if two:
         lines.append("    sgInk = max(sgInk, sgV.y);  // majors never thin out")
     if "poly" in f:
